@@ -1,0 +1,203 @@
+//! The method's parameters (safe Rust side). Every length is in model units;
+//! a length of 0 means "derive it from the mesh or the spacing".
+
+use crate::error::{Error, ErrorKind, Result};
+use glam::Vec3;
+
+/// How roots are planted (DESIGN.md §2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SamplerKind {
+    /// Orientation-field-guided sampling (paper, Algorithm 1).
+    Guided,
+    /// Area-weighted dart throwing at the same density (the 2015 baseline).
+    Random,
+}
+
+/// How frames after the first are handled (DESIGN.md §5).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Incremental reordering and minimal readjustment (paper §3.3).
+    Incremental,
+    /// The 2015 method: order fixed at the first frame, Eq. 2, fine pitch only.
+    Legacy,
+    /// Everything recomputed every frame; the quality reference.
+    Rebuild,
+}
+
+/// All parameters of a system. `Config::default()` gives the documented defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Seed of every random choice; same input and seed give the same bytes.
+    pub seed: u64,
+    /// Worker threads: 0 = all cores, 1 = run inline on the caller's thread.
+    pub threads: usize,
+    /// Root sampler.
+    pub sampler: SamplerKind,
+    /// Frame-to-frame mode.
+    pub mode: Mode,
+    /// Poisson-disk radius `d` in model units; 0 = derived (from
+    /// `target_feathers` when given, else from the mesh size).
+    pub spacing: f32,
+    /// Wanted feather count (0 = use `spacing`); met within ±15 %.
+    pub target_feathers: usize,
+    /// Stagger angle θ of Algorithm 1, radians (default π/4).
+    pub theta: f32,
+    /// Randomness `u0 ∈ [0, 1]` of Algorithm 1.
+    pub randomness: f32,
+    /// Sample pool size as a multiple of the expected root count.
+    pub pool_factor: f32,
+    /// Feather length; 0 = a multiple of the local spacing.
+    pub feather_length: f32,
+    /// Feather width; 0 = a multiple of the local spacing.
+    pub feather_width: f32,
+    /// Feather thickness; 0 = a fraction of the width.
+    pub feather_thickness: f32,
+    /// γ of Eq. 3 (and Eq. 2), `0 ≤ λ < γ < 1`.
+    pub gamma: f32,
+    /// λ of Eq. 3.
+    pub lambda: f32,
+    /// k of the k-nearest-root neighbourhoods.
+    pub k_neighbours: usize,
+    /// Height-field cells along the shaft.
+    pub height_field_u: usize,
+    /// Height-field cells across the vanes.
+    pub height_field_v: usize,
+    /// Extra lift added in the fine-pitch step, radians (≥ 0).
+    pub fluffiness: f32,
+    /// Allowed penetration into obstacles, as a fraction of feather thickness (≥ 0).
+    pub collision_allowance: f32,
+    /// Propagation threshold θs (radians): a readjusted feather whose pitch
+    /// or roll moved more than this makes its dependants readjust too.
+    pub theta_s: f32,
+    /// Flow axis used to derive the orientation field when the mesh gives no hints.
+    pub flow_axis: Vec3,
+    /// Recompute neighbourhoods and obstacle sets at the current pose each
+    /// frame (beyond the paper, its Fig. 8 limitation).
+    pub recompute_neighbourhoods: bool,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            threads: 0,
+            sampler: SamplerKind::Guided,
+            mode: Mode::Incremental,
+            spacing: 0.0,
+            target_feathers: 0,
+            theta: std::f32::consts::FRAC_PI_4,
+            randomness: 0.0,
+            pool_factor: 30.0,
+            feather_length: 0.0,
+            feather_width: 0.0,
+            feather_thickness: 0.0,
+            gamma: 0.6,
+            lambda: 0.3,
+            k_neighbours: 10,
+            height_field_u: 32,
+            height_field_v: 16,
+            fluffiness: 0.0,
+            collision_allowance: 0.0,
+            theta_s: 0.05,
+            flow_axis: Vec3::X,
+            recompute_neighbourhoods: true,
+        }
+    }
+}
+
+impl Config {
+    /// Checks every field against its documented range.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |msg: String| Err(Error::new(ErrorKind::InvalidArgument, msg));
+        let finite_nonneg = [
+            ("spacing", self.spacing),
+            ("feather_length", self.feather_length),
+            ("feather_width", self.feather_width),
+            ("feather_thickness", self.feather_thickness),
+            ("fluffiness", self.fluffiness),
+            ("collision_allowance", self.collision_allowance),
+            ("theta_s", self.theta_s),
+        ];
+        for (name, v) in finite_nonneg {
+            if !v.is_finite() || v < 0.0 {
+                return bad(format!("config.{name} must be finite and >= 0 (got {v})"));
+            }
+        }
+        if !self.theta.is_finite() {
+            return bad(format!("config.theta must be finite (got {})", self.theta));
+        }
+        if !(0.0..=1.0).contains(&self.randomness) {
+            return bad(format!(
+                "config.randomness must be in [0, 1] (got {})",
+                self.randomness
+            ));
+        }
+        if !(self.pool_factor.is_finite() && (1.0..=1000.0).contains(&self.pool_factor)) {
+            return bad(format!(
+                "config.pool_factor must be in [1, 1000] (got {})",
+                self.pool_factor
+            ));
+        }
+        if !(0.0 <= self.lambda && self.lambda < self.gamma && self.gamma < 1.0) {
+            return bad(format!(
+                "config needs 0 <= lambda < gamma < 1 (got gamma {}, lambda {})",
+                self.gamma, self.lambda
+            ));
+        }
+        if !(1..=64).contains(&self.k_neighbours) {
+            return bad(format!(
+                "config.k_neighbours must be in [1, 64] (got {})",
+                self.k_neighbours
+            ));
+        }
+        for (name, v) in [
+            ("height_field_u", self.height_field_u),
+            ("height_field_v", self.height_field_v),
+        ] {
+            if !(2..=1024).contains(&v) {
+                return bad(format!("config.{name} must be in [2, 1024] (got {v})"));
+            }
+        }
+        if self.threads > 1024 {
+            return bad(format!(
+                "config.threads must be at most 1024 (got {})",
+                self.threads
+            ));
+        }
+        if self.target_feathers > 10_000_000 {
+            return bad(format!(
+                "config.target_feathers must be at most 10000000 (got {})",
+                self.target_feathers
+            ));
+        }
+        if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
+            return bad(format!(
+                "config.flow_axis must be finite and non-zero (got {:?})",
+                self.flow_axis
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        Config::default().validate().unwrap();
+    }
+
+    #[test]
+    fn gamma_lambda_order_is_enforced() {
+        let cfg = Config {
+            lambda: 0.7,
+            ..Config::default()
+        };
+        assert_eq!(
+            cfg.validate().unwrap_err().kind(),
+            ErrorKind::InvalidArgument
+        );
+    }
+}

@@ -1,0 +1,238 @@
+//! The panic boundary and error bookkeeping shared by every entry point.
+//!
+//! Each `extern "C"` function runs its body through one of `with_system`,
+//! `with_system_ref` or `without_system`: NULL checks first, then the body
+//! behind `catch_unwind`. A caught panic poisons the handle. Error messages go
+//! to the handle's last-error slot, or to a thread-local slot when there is
+//! no handle (e.g. a refused create).
+
+use super::status::*;
+use crate::System;
+use std::any::Any;
+use std::cell::RefCell;
+use std::ffi::CString;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// An opaque feathering system. Create with `plumage_system_create`, free
+/// with `plumage_system_destroy`.
+pub struct PlumageSystem {
+    pub(crate) system: System,
+    poisoned: AtomicBool,
+    last_error: Mutex<CString>,
+}
+
+impl PlumageSystem {
+    pub(crate) fn new(system: System) -> Self {
+        Self {
+            system,
+            poisoned: AtomicBool::new(false),
+            last_error: Mutex::new(CString::default()),
+        }
+    }
+
+    fn set_error(&self, message: &str) {
+        let mut slot = self.last_error.lock().unwrap_or_else(|e| e.into_inner());
+        *slot = to_cstring(message);
+    }
+
+    pub(crate) fn last_error(&self) -> CString {
+        self.last_error
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    #[cfg(feature = "test-hooks")]
+    pub(crate) fn is_poisoned(&self) -> bool {
+        self.poisoned.load(Ordering::SeqCst)
+    }
+}
+
+/// A refused call: its status and message.
+pub(crate) struct Failure {
+    pub status: u32,
+    pub message: String,
+}
+
+impl Failure {
+    pub fn new(status: u32, message: impl Into<String>) -> Self {
+        Self {
+            status,
+            message: message.into(),
+        }
+    }
+
+    pub fn null(what: &str) -> Self {
+        Self::new(PLUMAGE_STATUS_NULL_POINTER, format!("{what} is NULL"))
+    }
+}
+
+impl From<crate::Error> for Failure {
+    fn from(e: crate::Error) -> Self {
+        Self::new(status_of(e.kind()), e.message())
+    }
+}
+
+pub(crate) type CallResult = Result<(), Failure>;
+
+thread_local! {
+    static THREAD_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+pub(crate) fn set_thread_error(message: &str) {
+    THREAD_ERROR.with(|slot| *slot.borrow_mut() = to_cstring(message));
+}
+
+pub(crate) fn thread_error() -> CString {
+    THREAD_ERROR.with(|slot| slot.borrow().clone())
+}
+
+fn to_cstring(message: &str) -> CString {
+    CString::new(message.replace('\0', " ")).unwrap_or_default()
+}
+
+fn panic_message(payload: &(dyn Any + Send)) -> String {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic payload".to_string());
+    format!("internal error (panic) in Plumage: {what}; the system is poisoned, destroy it")
+}
+
+/// A call that needs exclusive access to a live system.
+pub(crate) fn with_system(
+    sys: *mut PlumageSystem,
+    body: impl FnOnce(&mut System) -> CallResult,
+) -> u32 {
+    if sys.is_null() {
+        set_thread_error("system is NULL");
+        return PLUMAGE_STATUS_NULL_POINTER;
+    }
+    // SAFETY: the caller passes a pointer from plumage_system_create that it
+    // has not destroyed, and holds exclusive access (header contract).
+    let handle = unsafe { &mut *sys };
+    if handle.poisoned.load(Ordering::SeqCst) {
+        handle.set_error(
+            "the system is poisoned by an earlier internal error; only destroy is allowed",
+        );
+        return PLUMAGE_STATUS_POISONED;
+    }
+    let outcome = catch_unwind(AssertUnwindSafe(|| body(&mut handle.system)));
+    settle(handle, outcome)
+}
+
+/// A call that only reads a live system (may run concurrently with other reads).
+pub(crate) fn with_system_ref(
+    sys: *const PlumageSystem,
+    body: impl FnOnce(&System) -> CallResult,
+) -> u32 {
+    if sys.is_null() {
+        set_thread_error("system is NULL");
+        return PLUMAGE_STATUS_NULL_POINTER;
+    }
+    // SAFETY: as in `with_system`, shared access only.
+    let handle = unsafe { &*sys };
+    if handle.poisoned.load(Ordering::SeqCst) {
+        handle.set_error(
+            "the system is poisoned by an earlier internal error; only destroy is allowed",
+        );
+        return PLUMAGE_STATUS_POISONED;
+    }
+    let outcome = catch_unwind(AssertUnwindSafe(|| body(&handle.system)));
+    settle(handle, outcome)
+}
+
+fn settle(handle: &PlumageSystem, outcome: std::thread::Result<CallResult>) -> u32 {
+    match outcome {
+        Ok(Ok(())) => PLUMAGE_STATUS_OK,
+        Ok(Err(failure)) => {
+            handle.set_error(&failure.message);
+            failure.status
+        }
+        Err(payload) => {
+            handle.poisoned.store(true, Ordering::SeqCst);
+            handle.set_error(&panic_message(payload.as_ref()));
+            PLUMAGE_STATUS_PANIC
+        }
+    }
+}
+
+/// A call without a system (create, and calls on the library itself).
+pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => PLUMAGE_STATUS_OK,
+        Ok(Err(failure)) => {
+            set_thread_error(&failure.message);
+            failure.status
+        }
+        Err(payload) => {
+            set_thread_error(&panic_message(payload.as_ref()));
+            PLUMAGE_STATUS_PANIC
+        }
+    }
+}
+
+#[allow(dead_code)] // used by the feather queries
+/// Copies `items` out under the (buffer, capacity, out_len) convention:
+/// `*out_len` always receives the needed length; a NULL or too-small buffer
+/// gives BUFFER_TOO_SMALL and writes nothing.
+pub(crate) fn copy_out<T: Copy>(
+    items: &[T],
+    buf: *mut T,
+    capacity: usize,
+    out_len: *mut usize,
+) -> CallResult {
+    if out_len.is_null() {
+        return Err(Failure::null("out_len"));
+    }
+    // SAFETY: out_len is non-NULL and points to a size_t (contract).
+    unsafe { *out_len = items.len() };
+    if items.is_empty() {
+        return Ok(());
+    }
+    if buf.is_null() || capacity < items.len() {
+        return Err(Failure::new(
+            PLUMAGE_STATUS_BUFFER_TOO_SMALL,
+            format!(
+                "buffer holds {} elements but {} are needed",
+                if buf.is_null() { 0 } else { capacity },
+                items.len()
+            ),
+        ));
+    }
+    // SAFETY: buf holds at least `capacity >= items.len()` elements (contract).
+    unsafe { std::ptr::copy_nonoverlapping(items.as_ptr(), buf, items.len()) };
+    Ok(())
+}
+
+/// Reads a struct that starts with `uint32_t struct_size`: refuses sizes
+/// below `min_size`, copies what both sides know over `defaults` (a larger
+/// caller struct is accepted; unknown trailing fields are ignored).
+///
+/// # Safety
+/// `ptr` is non-NULL and points to at least `struct_size` readable bytes.
+pub(crate) unsafe fn read_versioned<T: Copy>(
+    ptr: *const T,
+    min_size: usize,
+    defaults: T,
+    name: &str,
+) -> Result<T, Failure> {
+    // SAFETY: every versioned struct starts with a u32 struct_size.
+    let declared = unsafe { std::ptr::read_unaligned(ptr as *const u32) } as usize;
+    if declared < min_size {
+        return Err(Failure::new(
+            PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE,
+            format!(
+                "{name}.struct_size is {declared} but the first published layout has {min_size} bytes; call the init function first"
+            ),
+        ));
+    }
+    let mut out = defaults;
+    let n = declared.min(std::mem::size_of::<T>());
+    // SAFETY: the caller's struct has `declared >= n` bytes; `out` has size_of::<T>() >= n.
+    unsafe { std::ptr::copy_nonoverlapping(ptr as *const u8, &mut out as *mut T as *mut u8, n) };
+    Ok(out)
+}

@@ -1,0 +1,310 @@
+//! `#[repr(C)]` parameter structs and their conversion to the safe API.
+
+use super::boundary::{Failure, read_versioned};
+use super::status::*;
+use crate::{Config, MeshInput, Mode, SamplerKind};
+use glam::Vec3;
+
+/// `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
+pub const PLUMAGE_SAMPLER_GUIDED: u32 = 0;
+/// `PlumageConfig.sampler`: area-weighted random dart throwing (the 2015 baseline).
+pub const PLUMAGE_SAMPLER_RANDOM: u32 = 1;
+
+/// `PlumageConfig.mode`: incremental reordering and readjustment (paper §3.3).
+pub const PLUMAGE_MODE_INCREMENTAL: u32 = 0;
+/// `PlumageConfig.mode`: the 2015 method (fixed order, Eq. 2, fine pitch only).
+pub const PLUMAGE_MODE_LEGACY: u32 = 1;
+/// `PlumageConfig.mode`: everything recomputed every frame (quality reference).
+pub const PLUMAGE_MODE_REBUILD: u32 = 2;
+
+/// Parameters of a system. Fill with `plumage_config_init`, then change what
+/// you need. Lengths are in model units; a length of 0 means "derive it".
+/// Fields are only ever appended; `struct_size` tells the library which ones
+/// the caller knows.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlumageConfig {
+    /// `sizeof(PlumageConfig)` as the caller compiled it (set by init).
+    pub struct_size: u32,
+    /// `PLUMAGE_SAMPLER_*`.
+    pub sampler: u32,
+    /// Seed of every random choice: same input and seed, same bytes.
+    pub seed: u64,
+    /// Worker threads: 0 = all cores, 1 = inline on the calling thread.
+    pub threads: u32,
+    /// `PLUMAGE_MODE_*`.
+    pub mode: u32,
+    /// Wanted number of feathers (0 = use `spacing`); met within ±15 %.
+    pub target_feathers: u32,
+    /// k of the k-nearest-root neighbourhoods (1..64, default 10).
+    pub k_neighbours: u32,
+    /// Poisson-disk radius between roots; 0 = derived from the mesh size.
+    pub spacing: f32,
+    /// Stagger angle θ of the guided sampler, radians (default π/4).
+    pub theta: f32,
+    /// Randomness u0 of the guided sampler, in [0, 1] (default 0).
+    pub randomness: f32,
+    /// Sample pool size as a multiple of the expected root count (default 30).
+    pub pool_factor: f32,
+    /// Feather length; 0 = derived from the local spacing.
+    pub feather_length: f32,
+    /// Feather width; 0 = derived from the local spacing.
+    pub feather_width: f32,
+    /// Feather thickness; 0 = derived from the width.
+    pub feather_thickness: f32,
+    /// γ of the priority difference (Eq. 3), 0 ≤ λ < γ < 1 (default 0.6).
+    pub gamma: f32,
+    /// λ of the priority difference (Eq. 3) (default 0.3).
+    pub lambda: f32,
+    /// Height-field cells along the shaft (default 32).
+    pub height_field_u: u32,
+    /// Height-field cells across the vanes (default 16).
+    pub height_field_v: u32,
+    /// Extra lift added by the fine-pitch step, radians (default 0).
+    pub fluffiness: f32,
+    /// Allowed penetration into obstacles, as a fraction of thickness (default 0).
+    pub collision_allowance: f32,
+    /// Propagation threshold θs, radians (default 0.05).
+    pub theta_s: f32,
+    /// Flow axis for the orientation field when the mesh gives no hints.
+    pub flow_axis: [f32; 3],
+    /// Non-zero: recompute neighbourhoods at the current pose every frame.
+    pub recompute_neighbourhoods: u32,
+}
+
+/// The size of the first published `PlumageConfig`; smaller is refused.
+pub(crate) const CONFIG_V1_SIZE: usize = std::mem::size_of::<PlumageConfig>();
+
+/// A mesh handed to `plumage_system_create`, in the caller's own numbering.
+/// Triangle soups (vertices split along UV or normal seams) are welded by
+/// position internally. Fill with `plumage_mesh_desc_init` first.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlumageMeshDesc {
+    /// `sizeof(PlumageMeshDesc)` as the caller compiled it (set by init).
+    pub struct_size: u32,
+    /// xyz per vertex, `3 * vertex_count` floats.
+    pub positions: *const f32,
+    /// Number of vertices; every frame must give exactly this many.
+    pub vertex_count: usize,
+    /// Three vertex indices per triangle.
+    pub indices: *const u32,
+    /// Number of triangles.
+    pub triangle_count: usize,
+    /// Optional xyz tangent hint per vertex (the orientation field); may be NULL.
+    pub orientations: *const f32,
+    /// Optional spacing multiplier per vertex (0 = bare skin); may be NULL.
+    pub spacing_scale: *const f32,
+    /// Optional feather length multiplier per vertex; may be NULL.
+    pub length_scale: *const f32,
+    /// Optional feather width multiplier per vertex; may be NULL.
+    pub width_scale: *const f32,
+}
+
+pub(crate) const MESH_DESC_V1_SIZE: usize = std::mem::size_of::<PlumageMeshDesc>();
+
+impl PlumageMeshDesc {
+    pub(crate) fn empty() -> Self {
+        Self {
+            struct_size: MESH_DESC_V1_SIZE as u32,
+            positions: std::ptr::null(),
+            vertex_count: 0,
+            indices: std::ptr::null(),
+            triangle_count: 0,
+            orientations: std::ptr::null(),
+            spacing_scale: std::ptr::null(),
+            length_scale: std::ptr::null(),
+            width_scale: std::ptr::null(),
+        }
+    }
+}
+
+impl PlumageConfig {
+    pub(crate) fn from_config(c: &Config) -> Self {
+        Self {
+            struct_size: CONFIG_V1_SIZE as u32,
+            sampler: match c.sampler {
+                SamplerKind::Guided => PLUMAGE_SAMPLER_GUIDED,
+                SamplerKind::Random => PLUMAGE_SAMPLER_RANDOM,
+            },
+            seed: c.seed,
+            threads: c.threads as u32,
+            mode: match c.mode {
+                Mode::Incremental => PLUMAGE_MODE_INCREMENTAL,
+                Mode::Legacy => PLUMAGE_MODE_LEGACY,
+                Mode::Rebuild => PLUMAGE_MODE_REBUILD,
+            },
+            target_feathers: c.target_feathers as u32,
+            k_neighbours: c.k_neighbours as u32,
+            spacing: c.spacing,
+            theta: c.theta,
+            randomness: c.randomness,
+            pool_factor: c.pool_factor,
+            feather_length: c.feather_length,
+            feather_width: c.feather_width,
+            feather_thickness: c.feather_thickness,
+            gamma: c.gamma,
+            lambda: c.lambda,
+            height_field_u: c.height_field_u as u32,
+            height_field_v: c.height_field_v as u32,
+            fluffiness: c.fluffiness,
+            collision_allowance: c.collision_allowance,
+            theta_s: c.theta_s,
+            flow_axis: c.flow_axis.to_array(),
+            recompute_neighbourhoods: c.recompute_neighbourhoods as u32,
+        }
+    }
+
+    pub(crate) fn to_config(&self) -> Result<Config, Failure> {
+        let invalid = |m: String| Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, m);
+        let sampler = match self.sampler {
+            PLUMAGE_SAMPLER_GUIDED => SamplerKind::Guided,
+            PLUMAGE_SAMPLER_RANDOM => SamplerKind::Random,
+            s => {
+                return Err(invalid(format!(
+                    "config.sampler {s} is not a PLUMAGE_SAMPLER_* value"
+                )));
+            }
+        };
+        let mode = match self.mode {
+            PLUMAGE_MODE_INCREMENTAL => Mode::Incremental,
+            PLUMAGE_MODE_LEGACY => Mode::Legacy,
+            PLUMAGE_MODE_REBUILD => Mode::Rebuild,
+            m => {
+                return Err(invalid(format!(
+                    "config.mode {m} is not a PLUMAGE_MODE_* value"
+                )));
+            }
+        };
+        let floats = [
+            self.spacing,
+            self.theta,
+            self.randomness,
+            self.pool_factor,
+            self.feather_length,
+            self.feather_width,
+            self.feather_thickness,
+            self.gamma,
+            self.lambda,
+            self.fluffiness,
+            self.collision_allowance,
+            self.theta_s,
+        ];
+        if floats.iter().chain(&self.flow_axis).any(|x| !x.is_finite()) {
+            return Err(Failure::new(
+                PLUMAGE_STATUS_NON_FINITE,
+                "config holds a NaN or infinite value",
+            ));
+        }
+        let cfg = Config {
+            seed: self.seed,
+            threads: self.threads as usize,
+            sampler,
+            mode,
+            spacing: self.spacing,
+            target_feathers: self.target_feathers as usize,
+            theta: self.theta,
+            randomness: self.randomness,
+            pool_factor: self.pool_factor,
+            feather_length: self.feather_length,
+            feather_width: self.feather_width,
+            feather_thickness: self.feather_thickness,
+            gamma: self.gamma,
+            lambda: self.lambda,
+            k_neighbours: self.k_neighbours as usize,
+            height_field_u: self.height_field_u as usize,
+            height_field_v: self.height_field_v as usize,
+            fluffiness: self.fluffiness,
+            collision_allowance: self.collision_allowance,
+            theta_s: self.theta_s,
+            flow_axis: Vec3::from_array(self.flow_axis),
+            recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
+        };
+        cfg.validate()?;
+        Ok(cfg)
+    }
+}
+
+/// Reads the caller's config (NULL = defaults) into a checked `Config`.
+///
+/// # Safety
+/// `cfg` is NULL or points to a `PlumageConfig` of at least `struct_size` bytes.
+pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<Config, Failure> {
+    if cfg.is_null() {
+        return Ok(Config::default());
+    }
+    let defaults = PlumageConfig::from_config(&Config::default());
+    // SAFETY: forwarded contract.
+    unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?.to_config()
+}
+
+/// Borrowed view of the caller's mesh arrays.
+///
+/// # Safety
+/// Every non-NULL pointer of `desc` points to as many elements as its count
+/// says, alive for `'a`.
+pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshInput<'a>, Failure> {
+    if desc.is_null() {
+        return Err(Failure::null("mesh description"));
+    }
+    // SAFETY: forwarded contract.
+    let d = unsafe {
+        read_versioned(
+            desc,
+            MESH_DESC_V1_SIZE,
+            PlumageMeshDesc::empty(),
+            "PlumageMeshDesc",
+        )
+    }?;
+    if d.positions.is_null() {
+        return Err(Failure::null("mesh positions"));
+    }
+    if d.indices.is_null() {
+        return Err(Failure::null("mesh indices"));
+    }
+    if d.vertex_count == 0 {
+        return Err(Failure::new(
+            PLUMAGE_STATUS_EMPTY_MESH,
+            "mesh has no vertices",
+        ));
+    }
+    if d.triangle_count == 0 {
+        return Err(Failure::new(
+            PLUMAGE_STATUS_EMPTY_MESH,
+            "mesh has no triangles",
+        ));
+    }
+    let floats = checked_len(d.vertex_count, 3, "vertex_count")?;
+    let idx = checked_len(d.triangle_count, 3, "triangle_count")?;
+    // SAFETY: non-NULL, lengths per the contract; sizes checked against overflow.
+    unsafe {
+        Ok(MeshInput {
+            positions: std::slice::from_raw_parts(d.positions, floats),
+            indices: std::slice::from_raw_parts(d.indices, idx),
+            orientations: optional_slice(d.orientations, floats),
+            spacing_scale: optional_slice(d.spacing_scale, d.vertex_count),
+            length_scale: optional_slice(d.length_scale, d.vertex_count),
+            width_scale: optional_slice(d.width_scale, d.vertex_count),
+        })
+    }
+}
+
+/// `count × per` elements of 4 bytes, refused when the byte size overflows
+/// or exceeds what a slice may span.
+pub(crate) fn checked_len(count: usize, per: usize, name: &str) -> Result<usize, Failure> {
+    count
+        .checked_mul(per)
+        .filter(|n| n.checked_mul(4).is_some_and(|b| b <= isize::MAX as usize))
+        .filter(|_| count <= u32::MAX as usize)
+        .ok_or_else(|| {
+            Failure::new(
+                PLUMAGE_STATUS_SIZE_OVERFLOW,
+                format!("{name} {count} is too large"),
+            )
+        })
+}
+
+unsafe fn optional_slice<'a>(ptr: *const f32, len: usize) -> Option<&'a [f32]> {
+    // SAFETY: forwarded contract of `read_mesh`.
+    (!ptr.is_null()).then(|| unsafe { std::slice::from_raw_parts(ptr, len) })
+}

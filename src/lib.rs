@@ -1,0 +1,21 @@
+//! Plumage dresses animated triangle meshes with feathers or fish scales and
+//! keeps them collision-free from frame to frame (Liu et al., "Incremental
+//! collision-free feathering for animated surfaces", The Visual Computer,
+//! 2017). The safe Rust API is [`System`]; C and C++ hosts use the C ABI in
+//! [`ffi`] through `include/plumage.h`.
+//!
+//! Where things live: `mesh` (input checks, welding), `geometry` (shared
+//! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
+//! `extern "C"` function, nothing else).
+
+pub mod config;
+pub mod error;
+pub mod ffi;
+pub mod geometry;
+pub mod mesh;
+pub mod system;
+
+pub use config::{Config, Mode, SamplerKind};
+pub use error::{Error, ErrorKind, Result};
+pub use mesh::MeshInput;
+pub use system::System;
