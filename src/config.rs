@@ -127,16 +127,10 @@ impl Config {
             return bad(format!("config.theta must be finite (got {})", self.theta));
         }
         if !(0.0..=1.0).contains(&self.randomness) {
-            return bad(format!(
-                "config.randomness must be in [0, 1] (got {})",
-                self.randomness
-            ));
+            return bad(format!("config.randomness must be in [0, 1] (got {})", self.randomness));
         }
         if !(self.pool_factor.is_finite() && (1.0..=1000.0).contains(&self.pool_factor)) {
-            return bad(format!(
-                "config.pool_factor must be in [1, 1000] (got {})",
-                self.pool_factor
-            ));
+            return bad(format!("config.pool_factor must be in [1, 1000] (got {})", self.pool_factor));
         }
         if !(0.0 <= self.lambda && self.lambda < self.gamma && self.gamma < 1.0) {
             return bad(format!(
@@ -145,36 +139,21 @@ impl Config {
             ));
         }
         if !(1..=64).contains(&self.k_neighbours) {
-            return bad(format!(
-                "config.k_neighbours must be in [1, 64] (got {})",
-                self.k_neighbours
-            ));
+            return bad(format!("config.k_neighbours must be in [1, 64] (got {})", self.k_neighbours));
         }
-        for (name, v) in [
-            ("height_field_u", self.height_field_u),
-            ("height_field_v", self.height_field_v),
-        ] {
+        for (name, v) in [("height_field_u", self.height_field_u), ("height_field_v", self.height_field_v)] {
             if !(2..=1024).contains(&v) {
                 return bad(format!("config.{name} must be in [2, 1024] (got {v})"));
             }
         }
         if self.threads > 1024 {
-            return bad(format!(
-                "config.threads must be at most 1024 (got {})",
-                self.threads
-            ));
+            return bad(format!("config.threads must be at most 1024 (got {})", self.threads));
         }
         if self.target_feathers > 10_000_000 {
-            return bad(format!(
-                "config.target_feathers must be at most 10000000 (got {})",
-                self.target_feathers
-            ));
+            return bad(format!("config.target_feathers must be at most 10000000 (got {})", self.target_feathers));
         }
         if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
-            return bad(format!(
-                "config.flow_axis must be finite and non-zero (got {:?})",
-                self.flow_axis
-            ));
+            return bad(format!("config.flow_axis must be finite and non-zero (got {:?})", self.flow_axis));
         }
         Ok(())
     }
@@ -191,13 +170,7 @@ mod tests {
 
     #[test]
     fn gamma_lambda_order_is_enforced() {
-        let cfg = Config {
-            lambda: 0.7,
-            ..Config::default()
-        };
-        assert_eq!(
-            cfg.validate().unwrap_err().kind(),
-            ErrorKind::InvalidArgument
-        );
+        let cfg = Config { lambda: 0.7, ..Config::default() };
+        assert_eq!(cfg.validate().unwrap_err().kind(), ErrorKind::InvalidArgument);
     }
 }

@@ -44,23 +44,14 @@ impl RootFrame {
     /// Builds the frame from a normal and any direction not parallel to it:
     /// `b = (n × o)/|n × o|`, `õ = b × n` (paper §2). `None` when the direction
     /// is (nearly) parallel to the normal or anything is not finite.
-    pub fn from_normal_and_direction(
-        position: Vec3,
-        normal: Vec3,
-        direction: Vec3,
-    ) -> Option<Self> {
+    pub fn from_normal_and_direction(position: Vec3, normal: Vec3, direction: Vec3) -> Option<Self> {
         let n = normal.try_normalize()?;
         let b = n.cross(direction).try_normalize()?;
         let t = b.cross(n);
         if !position.is_finite() {
             return None;
         }
-        Some(Self {
-            position,
-            normal: n,
-            tangent: t,
-            binormal: b,
-        })
+        Some(Self { position, normal: n, tangent: t, binormal: b })
     }
 
     /// Maps local feather coordinates (x along `õ`, y along `b`, z along `n`)
@@ -74,11 +65,7 @@ impl RootFrame {
     #[inline]
     pub fn to_local(&self, world: Vec3) -> Vec3 {
         let d = world - self.position;
-        Vec3::new(
-            d.dot(self.tangent),
-            d.dot(self.binormal),
-            d.dot(self.normal),
-        )
+        Vec3::new(d.dot(self.tangent), d.dot(self.binormal), d.dot(self.normal))
     }
 }
 

@@ -19,11 +19,7 @@ impl System {
         config.validate()?;
         mesh.check()?;
         let welded = weld(mesh)?;
-        Ok(Self {
-            config: config.clone(),
-            mesh: welded,
-            frames_stepped: 0,
-        })
+        Ok(Self { config: config.clone(), mesh: welded, frames_stepped: 0 })
     }
 
     /// The configuration the system was created with.

@@ -25,11 +25,7 @@ pub struct PlumageSystem {
 
 impl PlumageSystem {
     pub(crate) fn new(system: System) -> Self {
-        Self {
-            system,
-            poisoned: AtomicBool::new(false),
-            last_error: Mutex::new(CString::default()),
-        }
+        Self { system, poisoned: AtomicBool::new(false), last_error: Mutex::new(CString::default()) }
     }
 
     fn set_error(&self, message: &str) {
@@ -38,10 +34,7 @@ impl PlumageSystem {
     }
 
     pub(crate) fn last_error(&self) -> CString {
-        self.last_error
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
+        self.last_error.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     #[cfg(feature = "test-hooks")]
@@ -58,10 +51,7 @@ pub(crate) struct Failure {
 
 impl Failure {
     pub fn new(status: u32, message: impl Into<String>) -> Self {
-        Self {
-            status,
-            message: message.into(),
-        }
+        Self { status, message: message.into() }
     }
 
     pub fn null(what: &str) -> Self {
@@ -103,10 +93,7 @@ fn panic_message(payload: &(dyn Any + Send)) -> String {
 }
 
 /// A call that needs exclusive access to a live system.
-pub(crate) fn with_system(
-    sys: *mut PlumageSystem,
-    body: impl FnOnce(&mut System) -> CallResult,
-) -> u32 {
+pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System) -> CallResult) -> u32 {
     if sys.is_null() {
         set_thread_error("system is NULL");
         return PLUMAGE_STATUS_NULL_POINTER;
@@ -115,9 +102,7 @@ pub(crate) fn with_system(
     // has not destroyed, and holds exclusive access (header contract).
     let handle = unsafe { &mut *sys };
     if handle.poisoned.load(Ordering::SeqCst) {
-        handle.set_error(
-            "the system is poisoned by an earlier internal error; only destroy is allowed",
-        );
+        handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
     let outcome = catch_unwind(AssertUnwindSafe(|| body(&mut handle.system)));
@@ -125,10 +110,7 @@ pub(crate) fn with_system(
 }
 
 /// A call that only reads a live system (may run concurrently with other reads).
-pub(crate) fn with_system_ref(
-    sys: *const PlumageSystem,
-    body: impl FnOnce(&System) -> CallResult,
-) -> u32 {
+pub(crate) fn with_system_ref(sys: *const PlumageSystem, body: impl FnOnce(&System) -> CallResult) -> u32 {
     if sys.is_null() {
         set_thread_error("system is NULL");
         return PLUMAGE_STATUS_NULL_POINTER;
@@ -136,9 +118,7 @@ pub(crate) fn with_system_ref(
     // SAFETY: as in `with_system`, shared access only.
     let handle = unsafe { &*sys };
     if handle.poisoned.load(Ordering::SeqCst) {
-        handle.set_error(
-            "the system is poisoned by an earlier internal error; only destroy is allowed",
-        );
+        handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
     let outcome = catch_unwind(AssertUnwindSafe(|| body(&handle.system)));
@@ -179,12 +159,7 @@ pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
 /// Copies `items` out under the (buffer, capacity, out_len) convention:
 /// `*out_len` always receives the needed length; a NULL or too-small buffer
 /// gives BUFFER_TOO_SMALL and writes nothing.
-pub(crate) fn copy_out<T: Copy>(
-    items: &[T],
-    buf: *mut T,
-    capacity: usize,
-    out_len: *mut usize,
-) -> CallResult {
+pub(crate) fn copy_out<T: Copy>(items: &[T], buf: *mut T, capacity: usize, out_len: *mut usize) -> CallResult {
     if out_len.is_null() {
         return Err(Failure::null("out_len"));
     }

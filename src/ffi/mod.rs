@@ -16,12 +16,11 @@ use std::ffi::c_char;
 /// The ABI version of this header; bumped only by incompatible changes.
 pub const PLUMAGE_ABI_VERSION: u32 = 1;
 
-static VERSION: &std::ffi::CStr = match std::ffi::CStr::from_bytes_with_nul(
-    concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
-) {
-    Ok(v) => v,
-    Err(_) => panic!("version string"),
-};
+static VERSION: &std::ffi::CStr =
+    match std::ffi::CStr::from_bytes_with_nul(concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes()) {
+        Ok(v) => v,
+        Err(_) => panic!("version string"),
+    };
 
 /// The library version as "MAJOR.MINOR.PATCH". The string is static.
 #[unsafe(no_mangle)]
@@ -39,10 +38,7 @@ pub extern "C" fn plumage_abi_version() -> u32 {
 /// for a number this library does not define. Never NULL; the string is static.
 #[unsafe(no_mangle)]
 pub extern "C" fn plumage_status_name(status: u32) -> *const c_char {
-    STATUS_NAMES
-        .iter()
-        .find(|(code, _)| *code == status)
-        .map_or(c"UNKNOWN_STATUS".as_ptr(), |(_, name)| name.as_ptr())
+    STATUS_NAMES.iter().find(|(code, _)| *code == status).map_or(c"UNKNOWN_STATUS".as_ptr(), |(_, name)| name.as_ptr())
 }
 
 /// Fills `cfg` with the defaults and sets `struct_size`. NULL is ignored.
@@ -141,10 +137,7 @@ pub unsafe extern "C" fn plumage_system_evaluate(
 
 /// Writes the number of feathers to `*out`.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_feather_count(
-    sys: *const PlumageSystem,
-    out: *mut usize,
-) -> u32 {
+pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
     with_system_ref(sys, |system| {
         if out.is_null() {
             return Err(Failure::null("out"));
@@ -189,10 +182,7 @@ pub unsafe extern "C" fn plumage_system_last_error(
 }
 
 /// The frame's positions as a slice, after NULL and size checks.
-unsafe fn frame_positions<'a>(
-    positions: *const f32,
-    vertex_count: usize,
-) -> Result<&'a [f32], Failure> {
+unsafe fn frame_positions<'a>(positions: *const f32, vertex_count: usize) -> Result<&'a [f32], Failure> {
     if positions.is_null() {
         return Err(Failure::null("positions"));
     }

@@ -161,9 +161,7 @@ impl PlumageConfig {
             PLUMAGE_SAMPLER_GUIDED => SamplerKind::Guided,
             PLUMAGE_SAMPLER_RANDOM => SamplerKind::Random,
             s => {
-                return Err(invalid(format!(
-                    "config.sampler {s} is not a PLUMAGE_SAMPLER_* value"
-                )));
+                return Err(invalid(format!("config.sampler {s} is not a PLUMAGE_SAMPLER_* value")));
             }
         };
         let mode = match self.mode {
@@ -171,9 +169,7 @@ impl PlumageConfig {
             PLUMAGE_MODE_LEGACY => Mode::Legacy,
             PLUMAGE_MODE_REBUILD => Mode::Rebuild,
             m => {
-                return Err(invalid(format!(
-                    "config.mode {m} is not a PLUMAGE_MODE_* value"
-                )));
+                return Err(invalid(format!("config.mode {m} is not a PLUMAGE_MODE_* value")));
             }
         };
         let floats = [
@@ -191,10 +187,7 @@ impl PlumageConfig {
             self.theta_s,
         ];
         if floats.iter().chain(&self.flow_axis).any(|x| !x.is_finite()) {
-            return Err(Failure::new(
-                PLUMAGE_STATUS_NON_FINITE,
-                "config holds a NaN or infinite value",
-            ));
+            return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
         }
         let cfg = Config {
             seed: self.seed,
@@ -248,14 +241,7 @@ pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshI
         return Err(Failure::null("mesh description"));
     }
     // SAFETY: forwarded contract.
-    let d = unsafe {
-        read_versioned(
-            desc,
-            MESH_DESC_V1_SIZE,
-            PlumageMeshDesc::empty(),
-            "PlumageMeshDesc",
-        )
-    }?;
+    let d = unsafe { read_versioned(desc, MESH_DESC_V1_SIZE, PlumageMeshDesc::empty(), "PlumageMeshDesc") }?;
     if d.positions.is_null() {
         return Err(Failure::null("mesh positions"));
     }
@@ -263,16 +249,10 @@ pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshI
         return Err(Failure::null("mesh indices"));
     }
     if d.vertex_count == 0 {
-        return Err(Failure::new(
-            PLUMAGE_STATUS_EMPTY_MESH,
-            "mesh has no vertices",
-        ));
+        return Err(Failure::new(PLUMAGE_STATUS_EMPTY_MESH, "mesh has no vertices"));
     }
     if d.triangle_count == 0 {
-        return Err(Failure::new(
-            PLUMAGE_STATUS_EMPTY_MESH,
-            "mesh has no triangles",
-        ));
+        return Err(Failure::new(PLUMAGE_STATUS_EMPTY_MESH, "mesh has no triangles"));
     }
     let floats = checked_len(d.vertex_count, 3, "vertex_count")?;
     let idx = checked_len(d.triangle_count, 3, "triangle_count")?;
@@ -296,12 +276,7 @@ pub(crate) fn checked_len(count: usize, per: usize, name: &str) -> Result<usize,
         .checked_mul(per)
         .filter(|n| n.checked_mul(4).is_some_and(|b| b <= isize::MAX as usize))
         .filter(|_| count <= u32::MAX as usize)
-        .ok_or_else(|| {
-            Failure::new(
-                PLUMAGE_STATUS_SIZE_OVERFLOW,
-                format!("{name} {count} is too large"),
-            )
-        })
+        .ok_or_else(|| Failure::new(PLUMAGE_STATUS_SIZE_OVERFLOW, format!("{name} {count} is too large")))
 }
 
 unsafe fn optional_slice<'a>(ptr: *const f32, len: usize) -> Option<&'a [f32]> {

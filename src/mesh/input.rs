@@ -22,14 +22,7 @@ pub struct MeshInput<'a> {
 impl<'a> MeshInput<'a> {
     /// A mesh with positions and indices only.
     pub fn new(positions: &'a [f32], indices: &'a [u32]) -> Self {
-        Self {
-            positions,
-            indices,
-            orientations: None,
-            spacing_scale: None,
-            length_scale: None,
-            width_scale: None,
-        }
+        Self { positions, indices, orientations: None, spacing_scale: None, length_scale: None, width_scale: None }
     }
 
     /// Number of vertices (positions / 3).
@@ -49,44 +42,24 @@ impl<'a> MeshInput<'a> {
         if self.positions.len() % 3 != 0 {
             return Err(Error::new(
                 ErrorKind::InvalidMesh,
-                format!(
-                    "positions hold {} floats, not a multiple of 3",
-                    self.positions.len()
-                ),
+                format!("positions hold {} floats, not a multiple of 3", self.positions.len()),
             ));
         }
         if self.indices.len() % 3 != 0 {
             return Err(Error::new(
                 ErrorKind::InvalidMesh,
-                format!(
-                    "indices hold {} values, not a multiple of 3",
-                    self.indices.len()
-                ),
+                format!("indices hold {} values, not a multiple of 3", self.indices.len()),
             ));
         }
         let n = self.vertex_count();
         if n > u32::MAX as usize {
-            return Err(Error::new(
-                ErrorKind::SizeOverflow,
-                format!("{n} vertices exceed the 32-bit index range"),
-            ));
+            return Err(Error::new(ErrorKind::SizeOverflow, format!("{n} vertices exceed the 32-bit index range")));
         }
         check_finite("position", self.positions, 3)?;
-        if let Some((k, &i)) = self
-            .indices
-            .iter()
-            .enumerate()
-            .find(|&(_, &i)| i as usize >= n)
-        {
+        if let Some((k, &i)) = self.indices.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
             return Err(Error::new(
                 ErrorKind::IndexOutOfRange,
-                format!(
-                    "triangle {} corner {} has index {} but the mesh has {} vertices",
-                    k / 3,
-                    k % 3,
-                    i,
-                    n
-                ),
+                format!("triangle {} corner {} has index {} but the mesh has {} vertices", k / 3, k % 3, i, n),
             ));
         }
         if let Some(o) = self.orientations {
@@ -100,20 +73,9 @@ impl<'a> MeshInput<'a> {
         ] {
             if let Some(a) = arr {
                 check_len(name, a.len(), n)?;
-                if let Some((v, x)) = a
-                    .iter()
-                    .enumerate()
-                    .find(|(_, x)| !x.is_finite() || **x < 0.0)
-                {
-                    let kind = if x.is_finite() {
-                        ErrorKind::InvalidArgument
-                    } else {
-                        ErrorKind::NonFinite
-                    };
-                    return Err(Error::new(
-                        kind,
-                        format!("{name} of vertex {v} is {x}; it must be finite and >= 0"),
-                    ));
+                if let Some((v, x)) = a.iter().enumerate().find(|(_, x)| !x.is_finite() || **x < 0.0) {
+                    let kind = if x.is_finite() { ErrorKind::InvalidArgument } else { ErrorKind::NonFinite };
+                    return Err(Error::new(kind, format!("{name} of vertex {v} is {x}; it must be finite and >= 0")));
                 }
             }
         }
@@ -126,11 +88,7 @@ pub fn check_frame_positions(positions: &[f32], expected_vertices: usize) -> Res
     if positions.len() != expected_vertices * 3 {
         return Err(Error::new(
             ErrorKind::VertexCountMismatch,
-            format!(
-                "frame has {} vertices but the rest mesh has {}",
-                positions.len() / 3,
-                expected_vertices
-            ),
+            format!("frame has {} vertices but the rest mesh has {}", positions.len() / 3, expected_vertices),
         ));
     }
     check_finite("position", positions, 3)
@@ -138,10 +96,7 @@ pub fn check_frame_positions(positions: &[f32], expected_vertices: usize) -> Res
 
 fn check_len(name: &str, got: usize, want: usize) -> Result<()> {
     if got != want {
-        return Err(Error::new(
-            ErrorKind::InvalidMesh,
-            format!("{name} holds {got} values, expected {want}"),
-        ));
+        return Err(Error::new(ErrorKind::InvalidMesh, format!("{name} holds {got} values, expected {want}")));
     }
     Ok(())
 }
@@ -151,11 +106,7 @@ fn check_finite(what: &str, values: &[f32], stride: usize) -> Result<()> {
         None => Ok(()),
         Some(k) => Err(Error::new(
             ErrorKind::NonFinite,
-            format!(
-                "{what} of vertex {} has a non-finite coordinate ({})",
-                k / stride,
-                values[k]
-            ),
+            format!("{what} of vertex {} has a non-finite coordinate ({})", k / stride, values[k]),
         )),
     }
 }

@@ -43,11 +43,7 @@ impl WeldedMesh {
     pub fn set_caller_positions(&mut self, caller_positions: &[f32]) {
         for (p, &src) in self.positions.iter_mut().zip(&self.representative) {
             let s = src as usize * 3;
-            *p = Vec3::new(
-                caller_positions[s],
-                caller_positions[s + 1],
-                caller_positions[s + 2],
-            );
+            *p = Vec3::new(caller_positions[s], caller_positions[s + 1], caller_positions[s + 2]);
         }
     }
 
@@ -66,11 +62,7 @@ impl WeldedMesh {
     #[inline]
     pub fn corners(&self, t: usize) -> [Vec3; 3] {
         let [a, b, c] = self.triangles[t];
-        [
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        ]
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
     }
 }
 
@@ -84,11 +76,7 @@ pub fn weld(mesh: &MeshInput<'_>) -> Result<WeldedMesh> {
     for v in 0..n {
         let p = &mesh.positions[3 * v..3 * v + 3];
         // +0.0 turns -0.0 into +0.0 so both weld together.
-        let key = [
-            (p[0] + 0.0).to_bits(),
-            (p[1] + 0.0).to_bits(),
-            (p[2] + 0.0).to_bits(),
-        ];
+        let key = [(p[0] + 0.0).to_bits(), (p[1] + 0.0).to_bits(), (p[2] + 0.0).to_bits()];
         let id = match ids.entry(key) {
             Entry::Occupied(e) => *e.get(),
             Entry::Vacant(e) => {
@@ -106,11 +94,8 @@ pub fn weld(mesh: &MeshInput<'_>) -> Result<WeldedMesh> {
     let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(mesh.indices.len() / 3);
     let (mut degenerate, mut duplicate) = (0usize, 0usize);
     for (t, tri) in mesh.indices.chunks_exact(3).enumerate() {
-        let w = [
-            caller_to_welded[tri[0] as usize],
-            caller_to_welded[tri[1] as usize],
-            caller_to_welded[tri[2] as usize],
-        ];
+        let w =
+            [caller_to_welded[tri[0] as usize], caller_to_welded[tri[1] as usize], caller_to_welded[tri[2] as usize]];
         let [a, b, c] = w.map(|i| positions[i as usize]);
         if is_degenerate(a, b, c) || w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
             degenerate += 1;
@@ -128,10 +113,7 @@ pub fn weld(mesh: &MeshInput<'_>) -> Result<WeldedMesh> {
     if triangles.is_empty() {
         return Err(Error::new(
             ErrorKind::DegenerateMesh,
-            format!(
-                "all {} triangles are degenerate (zero area or repeated corners)",
-                mesh.indices.len() / 3
-            ),
+            format!("all {} triangles are degenerate (zero area or repeated corners)", mesh.indices.len() / 3),
         ));
     }
     Ok(WeldedMesh {
@@ -147,10 +129,7 @@ pub fn weld(mesh: &MeshInput<'_>) -> Result<WeldedMesh> {
 
 /// Zero area, or thinner than f32 can resolve relative to its longest edge.
 pub fn is_degenerate(a: Vec3, b: Vec3, c: Vec3) -> bool {
-    let longest2 = (b - a)
-        .length_squared()
-        .max((c - b).length_squared())
-        .max((a - c).length_squared());
+    let longest2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
     if !(longest2 > 0.0) || !longest2.is_finite() {
         return true;
     }
@@ -166,9 +145,7 @@ mod tests {
     #[test]
     fn seam_vertices_weld_and_map_back() {
         // Two triangles of a quad, unindexed with the shared edge duplicated.
-        let pos = [
-            0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 0., 0., 1., 1., 0., 0., 1., 0.,
-        ];
+        let pos = [0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 0., 0., 1., 1., 0., 0., 1., 0.];
         let idx = [0, 1, 2, 3, 4, 5];
         let m = weld(&MeshInput::new(&pos, &idx)).unwrap();
         assert_eq!(m.positions.len(), 4);
