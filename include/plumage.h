@@ -125,6 +125,11 @@
 #define PLUMAGE_STATUS_INVALID_STATE 15
 
 /**
+ * The requested figure has not been computed for this system (yet).
+ */
+#define PLUMAGE_STATUS_NOT_AVAILABLE 16
+
+/**
  * `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
  */
 #define PLUMAGE_SAMPLER_GUIDED 0
@@ -300,6 +305,220 @@ typedef struct PlumageMeshDesc {
   const float *width_scale;
 } PlumageMeshDesc;
 
+/**
+ * One feather, copied out by `plumage_system_feathers`.
+ */
+typedef struct PlumageFeather {
+  /**
+   * Stable 64-bit id derived from the root's rest binding and the seed.
+   */
+  uint64_t id;
+  /**
+   * Position of the feather in the adjustment order (0 = placed first).
+   */
+  uint32_t order_index;
+  /**
+   * The caller's triangle (index into the rest mesh's triangles) holding the root.
+   */
+  uint32_t triangle;
+  /**
+   * Barycentric weights of the root on that triangle's three corners.
+   */
+  float barycentric[3];
+  /**
+   * Root position at the current pose.
+   */
+  float root[3];
+  /**
+   * Unit surface normal at the root.
+   */
+  float normal[3];
+  /**
+   * Unit shaft direction after pitch and roll.
+   */
+  float direction[3];
+  /**
+   * Pitch, radians (positive lifts the tip away from the skin).
+   */
+  float pitch;
+  /**
+   * Roll about the shaft, radians.
+   */
+  float roll;
+  /**
+   * Length along the shaft.
+   */
+  float length;
+  /**
+   * Width across the vanes.
+   */
+  float width;
+  /**
+   * Thickness.
+   */
+  float thickness;
+} PlumageFeather;
+
+/**
+ * Sampling quality figures (`plumage_system_sampling_stats`). Set
+ * `struct_size = sizeof(PlumageSamplingStats)` before the call.
+ */
+typedef struct PlumageSamplingStats {
+  /**
+   * Set by the caller to `sizeof(PlumageSamplingStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Number of roots planted.
+   */
+  uint32_t roots;
+  /**
+   * Global Poisson-disk radius d used, model units.
+   */
+  float spacing;
+  /**
+   * min over roots of (distance to the nearest root on the same side) / d_i.
+   */
+  float relative_radius;
+  /**
+   * max over surface probes of (distance to the nearest root) / local d.
+   */
+  float coverage_gap;
+  /**
+   * Mean of cos 4(φ − θ) over each root's 4 nearest neighbours (1 = lattice turned by θ, 0 = random).
+   */
+  float alignment;
+  /**
+   * Wall time of sampling.
+   */
+  double seconds;
+} PlumageSamplingStats;
+
+/**
+ * Static ordering figures (`plumage_system_ordering_stats`). Set
+ * `struct_size = sizeof(PlumageOrderingStats)` before the call.
+ */
+typedef struct PlumageOrderingStats {
+  /**
+   * Set by the caller to `sizeof(PlumageOrderingStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Symmetric neighbour pairs.
+   */
+  uint32_t pairs;
+  /**
+   * Priority edges kept in the DAG.
+   */
+  uint32_t edges;
+  /**
+   * Edges dropped to break cycles.
+   */
+  uint32_t dropped_edges;
+  /**
+   * Edges whose head comes after their tail in the order (0 when correct).
+   */
+  uint32_t violations;
+  /**
+   * Wall time of neighbourhoods, priorities and ordering.
+   */
+  double seconds;
+} PlumageOrderingStats;
+
+/**
+ * What the last create, step or evaluate did (`plumage_system_frame_stats`).
+ * Set `struct_size = sizeof(PlumageFrameStats)` before the call.
+ */
+typedef struct PlumageFrameStats {
+  /**
+   * Set by the caller to `sizeof(PlumageFrameStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Feathers whose pitch or roll hit a limit.
+   */
+  uint32_t clamped;
+  /**
+   * 0 after create, then 1, 2, ... after each step (evaluate keeps it).
+   */
+  uint64_t frame_index;
+  /**
+   * Feathers re-adjusted.
+   */
+  uint64_t adjusted;
+  /**
+   * Obstacle feathers rasterised (collision detections).
+   */
+  uint64_t collision_tests;
+  /**
+   * collision_tests / adjusted (0 when nothing was adjusted).
+   */
+  double collision_tests_per_feather;
+  /**
+   * Neighbour pairs whose priority difference changed sign.
+   */
+  uint64_t priority_changes;
+  /**
+   * priority_changes as a percentage of the feather count.
+   */
+  double priority_change_percent;
+  /**
+   * Edge reversals carried out.
+   */
+  uint64_t reversals;
+  /**
+   * Reversals refused by the cycle rule.
+   */
+  uint64_t reversals_refused;
+  /**
+   * Cycles broken by deleting their smallest-|ΔP| edge.
+   */
+  uint64_t cycles_broken;
+  /**
+   * Seconds spent re-posing roots and reordering.
+   */
+  double reorder_seconds;
+  /**
+   * Seconds spent adjusting feathers.
+   */
+  double adjust_seconds;
+  /**
+   * Seconds of the whole call.
+   */
+  double step_seconds;
+} PlumageFrameStats;
+
+/**
+ * Exact validation of the current feathers (`plumage_system_validate`).
+ * Set `struct_size = sizeof(PlumageValidation)` before the call.
+ */
+typedef struct PlumageValidation {
+  /**
+   * Set by the caller to `sizeof(PlumageValidation)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Padding; always 0.
+   */
+  uint32_t reserved;
+  /**
+   * Pairs of feathers whose triangles intersect (exact test).
+   */
+  uint64_t intersecting_pairs;
+  /**
+   * Feathers crossing the body more than 5 % of their length from the root.
+   */
+  uint64_t body_penetrations;
+  /**
+   * Fraction of surface probes whose normal ray meets a feather.
+   */
+  double coverage;
+  /**
+   * Mean pitch of the feathers, degrees.
+   */
+  double mean_pitch_deg;
+} PlumageValidation;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -368,6 +587,58 @@ uint32_t plumage_system_evaluate(struct PlumageSystem *sys,
  * Writes the number of feathers to `*out`.
  */
 uint32_t plumage_system_feather_count(const struct PlumageSystem *sys, size_t *out);
+
+/**
+ * Writes the number of vertices every frame must provide (the rest mesh's
+ * count, in the caller's numbering) to `*out`.
+ */
+uint32_t plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *out);
+
+/**
+ * Copies one `PlumageFeather` per feather into `buf` (`capacity` elements).
+ * `*out_len` receives the feather count; a NULL or too small `buf` gives
+ * PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+ */
+uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
+                                 struct PlumageFeather *buf,
+                                 size_t capacity,
+                                 size_t *out_len);
+
+/**
+ * Copies the feathers' triangles as xyz floats: two triangles (one per
+ * vane) of three corners per feather, 18 floats per feather, in the order
+ * of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
+ */
+uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
+                                          float *xyz,
+                                          size_t capacity,
+                                          size_t *out_len);
+
+/**
+ * Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
+ * no roots have been planted.
+ */
+uint32_t plumage_system_sampling_stats(const struct PlumageSystem *sys,
+                                       struct PlumageSamplingStats *out);
+
+/**
+ * Static ordering figures. PLUMAGE_STATUS_NOT_AVAILABLE before any order exists.
+ */
+uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
+                                       struct PlumageOrderingStats *out);
+
+/**
+ * What the last successful create, step or evaluate did.
+ * PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ */
+uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct PlumageFrameStats *out);
+
+/**
+ * Runs the exact validation (triangle–triangle intersections, body
+ * penetrations, coverage, mean pitch) on the current feathers. Only reads
+ * the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ */
+uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct PlumageValidation *out);
 
 /**
  * Copies the message of the last failed call on `sys` into `buf` (at most

@@ -14,6 +14,7 @@ pub mod ffi;
 pub mod geometry;
 pub mod mesh;
 pub mod rng;
+pub mod stats;
 pub mod system;
 
 pub use config::{Config, Mode, SamplerKind};

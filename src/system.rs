@@ -4,6 +4,7 @@
 use crate::config::Config;
 use crate::error::Result;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
+use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 
 /// A feathered surface: created at the rest pose, then stepped frame by frame.
 #[derive(Clone, Debug)]
@@ -44,7 +45,38 @@ impl System {
 
     /// Number of feathers.
     pub fn feather_count(&self) -> usize {
-        0
+        self.feathers().len()
+    }
+
+    /// The feathers at the current pose, in a stable order (by root).
+    pub fn feathers(&self) -> &[FeatherRecord] {
+        &[]
+    }
+
+    /// Each feather's two triangles (one per vane), world space, in the
+    /// order of [`System::feathers`].
+    pub fn feather_triangles(&self) -> &[[[f32; 3]; 6]] {
+        &[]
+    }
+
+    /// Sampling figures, once roots have been planted.
+    pub fn sampling_report(&self) -> Option<SamplingReport> {
+        None
+    }
+
+    /// Ordering figures, once the static order exists.
+    pub fn ordering_report(&self) -> Option<OrderingReport> {
+        None
+    }
+
+    /// What the last create, step or evaluate did, once feathers are adjusted.
+    pub fn frame_report(&self) -> Option<FrameReport> {
+        None
+    }
+
+    /// Exact validation of the current feathers, once feathers exist.
+    pub fn validate(&self) -> Option<ValidationReport> {
+        None
     }
 
     /// Advances to the next animation frame. On error nothing changes.

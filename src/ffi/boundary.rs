@@ -155,7 +155,6 @@ pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
     }
 }
 
-#[allow(dead_code)] // used by the feather queries
 /// Copies `items` out under the (buffer, capacity, out_len) convention:
 /// `*out_len` always receives the needed length; a NULL or too-small buffer
 /// gives BUFFER_TOO_SMALL and writes nothing.
@@ -210,4 +209,29 @@ pub(crate) unsafe fn read_versioned<T: Copy>(
     // SAFETY: the caller's struct has `declared >= n` bytes; `out` has size_of::<T>() >= n.
     unsafe { std::ptr::copy_nonoverlapping(ptr as *const u8, &mut out as *mut T as *mut u8, n) };
     Ok(out)
+}
+
+/// Writes `value` into a caller struct that starts with `uint32_t
+/// struct_size` (set by the caller to its `sizeof`): refuses sizes below
+/// `min_size`, writes only the bytes both sides know, and sets
+/// `struct_size` to the number of bytes written.
+///
+/// # Safety
+/// `ptr` is non-NULL and points to at least `struct_size` writable bytes.
+pub(crate) unsafe fn write_versioned<T: Copy>(ptr: *mut T, min_size: usize, value: T, name: &str) -> CallResult {
+    // SAFETY: every versioned struct starts with a u32 struct_size.
+    let declared = unsafe { std::ptr::read_unaligned(ptr as *const u32) } as usize;
+    if declared < min_size {
+        return Err(Failure::new(
+            PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE,
+            format!("{name}.struct_size is {declared}; set it to sizeof({name}) (at least {min_size})"),
+        ));
+    }
+    let n = declared.min(std::mem::size_of::<T>());
+    // SAFETY: both sides hold at least n bytes; struct_size is the first field.
+    unsafe {
+        std::ptr::copy_nonoverlapping(&value as *const T as *const u8, ptr as *mut u8, n);
+        std::ptr::write_unaligned(ptr as *mut u32, n as u32);
+    }
+    Ok(())
 }

@@ -10,7 +10,7 @@ pub use boundary::PlumageSystem;
 pub use status::*;
 pub use types::*;
 
-use boundary::{Failure, thread_error, with_system, with_system_ref, without_system};
+use boundary::{Failure, copy_out, thread_error, with_system, with_system_ref, without_system, write_versioned};
 use std::ffi::c_char;
 
 /// The ABI version of this header; bumped only by incompatible changes.
@@ -146,6 +146,162 @@ pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem,
         unsafe { *out = system.feather_count() };
         Ok(())
     })
+}
+
+/// Writes the number of vertices every frame must provide (the rest mesh's
+/// count, in the caller's numbering) to `*out`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_vertex_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        // SAFETY: non-NULL, points to a size_t (contract).
+        unsafe { *out = system.vertex_count() };
+        Ok(())
+    })
+}
+
+/// Copies one `PlumageFeather` per feather into `buf` (`capacity` elements).
+/// `*out_len` receives the feather count; a NULL or too small `buf` gives
+/// PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_feathers(
+    sys: *const PlumageSystem,
+    buf: *mut PlumageFeather,
+    capacity: usize,
+    out_len: *mut usize,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        let records: Vec<PlumageFeather> = system.feathers().iter().map(PlumageFeather::from).collect();
+        copy_out(&records, buf, capacity, out_len)
+    })
+}
+
+/// Copies the feathers' triangles as xyz floats: two triangles (one per
+/// vane) of three corners per feather, 18 floats per feather, in the order
+/// of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_feather_triangles(
+    sys: *const PlumageSystem,
+    xyz: *mut f32,
+    capacity: usize,
+    out_len: *mut usize,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        let tris = system.feather_triangles();
+        // SAFETY: [[f32; 3]; 6] is 18 contiguous f32s.
+        let flat = unsafe { std::slice::from_raw_parts(tris.as_ptr() as *const f32, tris.len() * 18) };
+        copy_out(flat, xyz, capacity, out_len)
+    })
+}
+
+/// Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
+/// no roots have been planted.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_sampling_stats(
+    sys: *const PlumageSystem,
+    out: *mut PlumageSamplingStats,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let r = system.sampling_report().ok_or_else(|| not_available("sampling figures"))?;
+        let value = PlumageSamplingStats {
+            struct_size: 0,
+            roots: r.roots as u32,
+            spacing: r.spacing,
+            relative_radius: r.relative_radius,
+            coverage_gap: r.coverage_gap,
+            alignment: r.alignment,
+            seconds: r.seconds,
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, std::mem::size_of::<PlumageSamplingStats>(), value, "PlumageSamplingStats") }
+    })
+}
+
+/// Static ordering figures. PLUMAGE_STATUS_NOT_AVAILABLE before any order exists.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_ordering_stats(
+    sys: *const PlumageSystem,
+    out: *mut PlumageOrderingStats,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let r = system.ordering_report().ok_or_else(|| not_available("ordering figures"))?;
+        let value = PlumageOrderingStats {
+            struct_size: 0,
+            pairs: r.pairs as u32,
+            edges: r.edges as u32,
+            dropped_edges: r.dropped_edges as u32,
+            violations: r.violations as u32,
+            seconds: r.seconds,
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, std::mem::size_of::<PlumageOrderingStats>(), value, "PlumageOrderingStats") }
+    })
+}
+
+/// What the last successful create, step or evaluate did.
+/// PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, out: *mut PlumageFrameStats) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let r = system.frame_report().ok_or_else(|| not_available("frame figures"))?;
+        let feathers = system.feather_count().max(1) as f64;
+        let value = PlumageFrameStats {
+            struct_size: 0,
+            clamped: r.clamped as u32,
+            frame_index: r.frame_index,
+            adjusted: r.adjusted as u64,
+            collision_tests: r.collision_tests,
+            collision_tests_per_feather: r.collision_tests_per_feather(),
+            priority_changes: r.priority_changes as u64,
+            priority_change_percent: 100.0 * r.priority_changes as f64 / feathers,
+            reversals: r.reversals as u64,
+            reversals_refused: r.reversals_refused as u64,
+            cycles_broken: r.cycles_broken as u64,
+            reorder_seconds: r.reorder_seconds,
+            adjust_seconds: r.adjust_seconds,
+            step_seconds: r.step_seconds,
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, std::mem::size_of::<PlumageFrameStats>(), value, "PlumageFrameStats") }
+    })
+}
+
+/// Runs the exact validation (triangle–triangle intersections, body
+/// penetrations, coverage, mean pitch) on the current feathers. Only reads
+/// the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out: *mut PlumageValidation) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let r = system.validate().ok_or_else(|| not_available("validation"))?;
+        let value = PlumageValidation {
+            struct_size: 0,
+            reserved: 0,
+            intersecting_pairs: r.intersecting_pairs as u64,
+            body_penetrations: r.body_penetrations as u64,
+            coverage: r.coverage,
+            mean_pitch_deg: r.mean_pitch_deg,
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, std::mem::size_of::<PlumageValidation>(), value, "PlumageValidation") }
+    })
+}
+
+fn not_available(what: &str) -> Failure {
+    Failure::new(PLUMAGE_STATUS_NOT_AVAILABLE, format!("{what} are not available: this system has no feathers yet"))
 }
 
 /// Copies the message of the last failed call on `sys` into `buf` (at most

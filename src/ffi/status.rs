@@ -32,6 +32,8 @@ pub const PLUMAGE_STATUS_DEGENERATE_MESH: u32 = 13;
 pub const PLUMAGE_STATUS_SIZE_OVERFLOW: u32 = 14;
 /// A saved state blob is truncated, corrupt, foreign or from another system.
 pub const PLUMAGE_STATUS_INVALID_STATE: u32 = 15;
+/// The requested figure has not been computed for this system (yet).
+pub const PLUMAGE_STATUS_NOT_AVAILABLE: u32 = 16;
 
 /// Every status with its name, in numeric order.
 pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
@@ -51,6 +53,7 @@ pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
     (PLUMAGE_STATUS_DEGENERATE_MESH, c"DEGENERATE_MESH"),
     (PLUMAGE_STATUS_SIZE_OVERFLOW, c"SIZE_OVERFLOW"),
     (PLUMAGE_STATUS_INVALID_STATE, c"INVALID_STATE"),
+    (PLUMAGE_STATUS_NOT_AVAILABLE, c"NOT_AVAILABLE"),
 ];
 
 /// The status a safe-API error kind maps to.

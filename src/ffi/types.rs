@@ -283,3 +283,146 @@ unsafe fn optional_slice<'a>(ptr: *const f32, len: usize) -> Option<&'a [f32]> {
     // SAFETY: forwarded contract of `read_mesh`.
     (!ptr.is_null()).then(|| unsafe { std::slice::from_raw_parts(ptr, len) })
 }
+
+/// One feather, copied out by `plumage_system_feathers`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageFeather {
+    /// Stable 64-bit id derived from the root's rest binding and the seed.
+    pub id: u64,
+    /// Position of the feather in the adjustment order (0 = placed first).
+    pub order_index: u32,
+    /// The caller's triangle (index into the rest mesh's triangles) holding the root.
+    pub triangle: u32,
+    /// Barycentric weights of the root on that triangle's three corners.
+    pub barycentric: [f32; 3],
+    /// Root position at the current pose.
+    pub root: [f32; 3],
+    /// Unit surface normal at the root.
+    pub normal: [f32; 3],
+    /// Unit shaft direction after pitch and roll.
+    pub direction: [f32; 3],
+    /// Pitch, radians (positive lifts the tip away from the skin).
+    pub pitch: f32,
+    /// Roll about the shaft, radians.
+    pub roll: f32,
+    /// Length along the shaft.
+    pub length: f32,
+    /// Width across the vanes.
+    pub width: f32,
+    /// Thickness.
+    pub thickness: f32,
+}
+
+impl From<&crate::stats::FeatherRecord> for PlumageFeather {
+    fn from(f: &crate::stats::FeatherRecord) -> Self {
+        Self {
+            id: f.id,
+            order_index: f.order_index,
+            triangle: f.triangle,
+            barycentric: f.barycentric,
+            root: f.root,
+            normal: f.normal,
+            direction: f.direction,
+            pitch: f.pitch,
+            roll: f.roll,
+            length: f.length,
+            width: f.width,
+            thickness: f.thickness,
+        }
+    }
+}
+
+/// Sampling quality figures (`plumage_system_sampling_stats`). Set
+/// `struct_size = sizeof(PlumageSamplingStats)` before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageSamplingStats {
+    /// Set by the caller to `sizeof(PlumageSamplingStats)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Number of roots planted.
+    pub roots: u32,
+    /// Global Poisson-disk radius d used, model units.
+    pub spacing: f32,
+    /// min over roots of (distance to the nearest root on the same side) / d_i.
+    pub relative_radius: f32,
+    /// max over surface probes of (distance to the nearest root) / local d.
+    pub coverage_gap: f32,
+    /// Mean of cos 4(φ − θ) over each root's 4 nearest neighbours (1 = lattice turned by θ, 0 = random).
+    pub alignment: f32,
+    /// Wall time of sampling.
+    pub seconds: f64,
+}
+
+/// Static ordering figures (`plumage_system_ordering_stats`). Set
+/// `struct_size = sizeof(PlumageOrderingStats)` before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageOrderingStats {
+    /// Set by the caller to `sizeof(PlumageOrderingStats)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Symmetric neighbour pairs.
+    pub pairs: u32,
+    /// Priority edges kept in the DAG.
+    pub edges: u32,
+    /// Edges dropped to break cycles.
+    pub dropped_edges: u32,
+    /// Edges whose head comes after their tail in the order (0 when correct).
+    pub violations: u32,
+    /// Wall time of neighbourhoods, priorities and ordering.
+    pub seconds: f64,
+}
+
+/// What the last create, step or evaluate did (`plumage_system_frame_stats`).
+/// Set `struct_size = sizeof(PlumageFrameStats)` before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageFrameStats {
+    /// Set by the caller to `sizeof(PlumageFrameStats)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Feathers whose pitch or roll hit a limit.
+    pub clamped: u32,
+    /// 0 after create, then 1, 2, ... after each step (evaluate keeps it).
+    pub frame_index: u64,
+    /// Feathers re-adjusted.
+    pub adjusted: u64,
+    /// Obstacle feathers rasterised (collision detections).
+    pub collision_tests: u64,
+    /// collision_tests / adjusted (0 when nothing was adjusted).
+    pub collision_tests_per_feather: f64,
+    /// Neighbour pairs whose priority difference changed sign.
+    pub priority_changes: u64,
+    /// priority_changes as a percentage of the feather count.
+    pub priority_change_percent: f64,
+    /// Edge reversals carried out.
+    pub reversals: u64,
+    /// Reversals refused by the cycle rule.
+    pub reversals_refused: u64,
+    /// Cycles broken by deleting their smallest-|ΔP| edge.
+    pub cycles_broken: u64,
+    /// Seconds spent re-posing roots and reordering.
+    pub reorder_seconds: f64,
+    /// Seconds spent adjusting feathers.
+    pub adjust_seconds: f64,
+    /// Seconds of the whole call.
+    pub step_seconds: f64,
+}
+
+/// Exact validation of the current feathers (`plumage_system_validate`).
+/// Set `struct_size = sizeof(PlumageValidation)` before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageValidation {
+    /// Set by the caller to `sizeof(PlumageValidation)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Padding; always 0.
+    pub reserved: u32,
+    /// Pairs of feathers whose triangles intersect (exact test).
+    pub intersecting_pairs: u64,
+    /// Feathers crossing the body more than 5 % of their length from the root.
+    pub body_penetrations: u64,
+    /// Fraction of surface probes whose normal ray meets a feather.
+    pub coverage: f64,
+    /// Mean pitch of the feathers, degrees.
+    pub mean_pitch_deg: f64,
+}

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Makes sure the build tools are present: cargo (must already be installed),
+# cmake, g++, pkg-config and Debian's libtinygltf-dev. Installs the missing
+# Debian packages when run as root with apt-get; otherwise stops and prints
+# the exact command to run.
+set -euo pipefail
+
+export PATH="$HOME/.cargo/bin:$PATH"
+if ! command -v cargo >/dev/null 2>&1; then
+  echo "error: cargo is not installed. Install the Rust toolchain (rustup, stable >= 1.85) and run again." >&2
+  exit 1
+fi
+
+missing=()
+command -v cmake >/dev/null 2>&1 || missing+=(cmake)
+command -v g++ >/dev/null 2>&1 || missing+=(g++)
+command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
+[ -f /usr/include/tiny_gltf.h ] || missing+=(libtinygltf-dev)
+[ -f /usr/include/nlohmann/json.hpp ] || missing+=(nlohmann-json3-dev)
+
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "installing: ${missing[*]}" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq >/dev/null
+    apt-get install -y -qq "${missing[@]}" >/dev/null
+  else
+    echo "error: missing ${missing[*]}. Run:" >&2
+    echo "  sudo apt-get update && sudo apt-get install -y ${missing[*]}" >&2
+    exit 1
+  fi
+fi

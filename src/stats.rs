@@ -1,0 +1,110 @@
+//! Figures a system reports: sampling quality, ordering, per-frame costs and
+//! exact validation. Plain data; the FFI layer copies them out.
+
+/// Sampling quality of the roots (DESIGN.md §2).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SamplingReport {
+    /// Number of roots planted.
+    pub roots: usize,
+    /// Global Poisson-disk radius `d` used.
+    pub spacing: f32,
+    /// min over roots of (distance to nearest root on the same side) / d_i.
+    pub relative_radius: f32,
+    /// max over surface probes of (distance to nearest root) / local d.
+    pub coverage_gap: f32,
+    /// mean of cos 4(φ − θ) over each root's 4 nearest neighbours.
+    pub alignment: f32,
+    /// Wall time of sampling.
+    pub seconds: f64,
+}
+
+/// The static order (DESIGN.md §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct OrderingReport {
+    /// Symmetric neighbour pairs.
+    pub pairs: usize,
+    /// Priority edges kept in the DAG.
+    pub edges: usize,
+    /// Edges dropped to break cycles.
+    pub dropped_edges: usize,
+    /// Edges whose head comes after their tail in the order (must be 0).
+    pub violations: usize,
+    /// Wall time of neighbourhoods, priorities and ordering.
+    pub seconds: f64,
+}
+
+/// What one create, step or evaluate did (DESIGN.md §5 step 5).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameReport {
+    /// 0 for create, then 1, 2, ... for each step; evaluate keeps the index.
+    pub frame_index: u64,
+    /// Feathers re-adjusted in this call.
+    pub adjusted: usize,
+    /// Obstacle feathers rasterised in this call.
+    pub collision_tests: u64,
+    /// Pairs whose priority difference changed sign.
+    pub priority_changes: usize,
+    /// Edge reversals carried out.
+    pub reversals: usize,
+    /// Reversals refused by the cycle rule (old edge kept).
+    pub reversals_refused: usize,
+    /// Cycles broken by deleting their smallest-|ΔP| edge.
+    pub cycles_broken: usize,
+    /// Feathers whose pitch or roll hit a limit.
+    pub clamped: usize,
+    /// Seconds spent re-posing roots and reordering.
+    pub reorder_seconds: f64,
+    /// Seconds spent in the height-field adjustment.
+    pub adjust_seconds: f64,
+    /// Seconds for the whole call.
+    pub step_seconds: f64,
+}
+
+impl FrameReport {
+    /// Collision tests per adjusted feather (0 when none was adjusted).
+    pub fn collision_tests_per_feather(&self) -> f64 {
+        if self.adjusted == 0 { 0.0 } else { self.collision_tests as f64 / self.adjusted as f64 }
+    }
+}
+
+/// Exact validation of the current feathers (DESIGN.md §6).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ValidationReport {
+    /// Pairs of feathers whose triangles intersect.
+    pub intersecting_pairs: usize,
+    /// Feathers crossing the body more than 5 % of their length from the root.
+    pub body_penetrations: usize,
+    /// Fraction of surface probes whose normal ray meets a feather.
+    pub coverage: f64,
+    /// Mean pitch in degrees.
+    pub mean_pitch_deg: f64,
+}
+
+/// One feather as the host sees it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FeatherRecord {
+    /// Stable id from the rest binding and the seed.
+    pub id: u64,
+    /// Position in the adjustment order.
+    pub order_index: u32,
+    /// The caller's triangle holding the root.
+    pub triangle: u32,
+    /// Barycentric weights of the root on that triangle's corners.
+    pub barycentric: [f32; 3],
+    /// Root position.
+    pub root: [f32; 3],
+    /// Surface normal at the root.
+    pub normal: [f32; 3],
+    /// Shaft direction after pitch and roll.
+    pub direction: [f32; 3],
+    /// Pitch, radians.
+    pub pitch: f32,
+    /// Roll, radians.
+    pub roll: f32,
+    /// Feather length.
+    pub length: f32,
+    /// Feather width.
+    pub width: f32,
+    /// Feather thickness.
+    pub thickness: f32,
+}

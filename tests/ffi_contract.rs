@@ -1,0 +1,246 @@
+//! The C ABI contract, exercised from Rust: versions, status names, struct
+//! sizes, and every bad input of the foundation issue. Each refusal has its
+//! own status and a readable message, leaves `*out` NULL, and leaves a live
+//! system exactly as it was.
+
+use plumage::ffi::*;
+use std::ffi::CStr;
+use std::ptr::{null, null_mut};
+
+/// A 4×4-vertex grid in the z = 0 plane, as a glTF-style soup (each
+/// triangle has its own three vertices).
+fn grid_soup() -> (Vec<f32>, Vec<u32>) {
+    let mut pos = Vec::new();
+    let mut idx = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            let (x, y) = (i as f32, j as f32);
+            for (a, b) in [(0., 0.), (1., 0.), (1., 1.), (0., 0.), (1., 1.), (0., 1.)] {
+                idx.push((pos.len() / 3) as u32);
+                pos.extend_from_slice(&[x + a, y + b, 0.0]);
+            }
+        }
+    }
+    (pos, idx)
+}
+
+fn desc(pos: &[f32], idx: &[u32]) -> PlumageMeshDesc {
+    let mut d = std::mem::MaybeUninit::<PlumageMeshDesc>::uninit();
+    unsafe { plumage_mesh_desc_init(d.as_mut_ptr()) };
+    let mut d = unsafe { d.assume_init() };
+    d.positions = pos.as_ptr();
+    d.vertex_count = pos.len() / 3;
+    d.indices = idx.as_ptr();
+    d.triangle_count = idx.len() / 3;
+    d
+}
+
+fn thread_error() -> String {
+    let n = unsafe { plumage_system_last_error(null(), null_mut(), 0) };
+    let mut buf = vec![0 as std::ffi::c_char; n];
+    unsafe { plumage_system_last_error(null(), buf.as_mut_ptr(), n) };
+    unsafe { CStr::from_ptr(buf.as_ptr()) }.to_string_lossy().into_owned()
+}
+
+fn system_error(sys: *const PlumageSystem) -> String {
+    let n = unsafe { plumage_system_last_error(sys, null_mut(), 0) };
+    let mut buf = vec![0 as std::ffi::c_char; n];
+    unsafe { plumage_system_last_error(sys, buf.as_mut_ptr(), n) };
+    unsafe { CStr::from_ptr(buf.as_ptr()) }.to_string_lossy().into_owned()
+}
+
+/// Creates with `d`, expecting `status`; checks `*out` stays NULL and a message exists.
+fn expect_refused(cfg: *const PlumageConfig, d: *const PlumageMeshDesc, status: u32) {
+    let mut out: *mut PlumageSystem = 0x1 as *mut PlumageSystem;
+    let got = unsafe { plumage_system_create(cfg, d, &mut out) };
+    assert_eq!(got, status, "status {} ({}), message: {}", got, name(got), thread_error());
+    assert!(out.is_null(), "*out must be NULL after a refusal");
+    assert!(!thread_error().is_empty(), "a refused create leaves a message");
+}
+
+fn name(status: u32) -> String {
+    unsafe { CStr::from_ptr(plumage_status_name(status)) }.to_string_lossy().into_owned()
+}
+
+fn create(pos: &[f32], idx: &[u32]) -> *mut PlumageSystem {
+    let d = desc(pos, idx);
+    let mut out = null_mut();
+    let st = unsafe { plumage_system_create(null(), &d, &mut out) };
+    assert_eq!(st, PLUMAGE_STATUS_OK, "{}", thread_error());
+    assert!(!out.is_null());
+    out
+}
+
+#[test]
+fn versions_and_status_names() {
+    let v = unsafe { CStr::from_ptr(plumage_version()) }.to_str().unwrap();
+    assert_eq!(v.split('.').count(), 3);
+    assert!(v.split('.').all(|p| p.parse::<u32>().is_ok()), "{v}");
+    assert_eq!(v, env!("CARGO_PKG_VERSION"));
+    assert_eq!(plumage_abi_version(), PLUMAGE_ABI_VERSION);
+    let mut names = std::collections::BTreeSet::new();
+    for s in 0..=PLUMAGE_STATUS_NOT_AVAILABLE {
+        let n = name(s);
+        assert_ne!(n, "UNKNOWN_STATUS", "status {s} has a name");
+        assert!(names.insert(n), "names are distinct");
+    }
+    assert_eq!(name(9999), "UNKNOWN_STATUS");
+    assert_eq!(name(u32::MAX), "UNKNOWN_STATUS");
+}
+
+#[test]
+fn init_functions_fill_sizes_and_defaults() {
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+    let cfg = unsafe { cfg.assume_init() };
+    assert_eq!(cfg.struct_size as usize, std::mem::size_of::<PlumageConfig>());
+    assert_eq!(cfg.k_neighbours, 10);
+    assert!((cfg.gamma - 0.6).abs() < 1e-6 && (cfg.lambda - 0.3).abs() < 1e-6);
+    assert!((cfg.theta - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+    let d = desc(&[], &[]);
+    assert_eq!(d.struct_size as usize, std::mem::size_of::<PlumageMeshDesc>());
+    unsafe { plumage_config_init(null_mut()) };
+    unsafe { plumage_mesh_desc_init(null_mut()) };
+}
+
+#[test]
+fn a_gltf_soup_is_welded_and_steps_in_caller_numbering() {
+    let (pos, idx) = grid_soup();
+    let sys = create(&pos, &idx);
+    let mut n = 0usize;
+    assert_eq!(unsafe { plumage_system_vertex_count(sys, &mut n) }, PLUMAGE_STATUS_OK);
+    assert_eq!(n, pos.len() / 3, "frames use the caller's own numbering");
+    assert_eq!(unsafe { plumage_system_step(sys, pos.as_ptr(), n) }, PLUMAGE_STATUS_OK);
+    assert_eq!(unsafe { plumage_system_evaluate(sys, pos.as_ptr(), n) }, PLUMAGE_STATUS_OK);
+    let mut count = 7usize;
+    assert_eq!(unsafe { plumage_system_feather_count(sys, &mut count) }, PLUMAGE_STATUS_OK);
+    unsafe { plumage_system_destroy(sys) };
+    unsafe { plumage_system_destroy(null_mut()) };
+}
+
+#[test]
+fn bad_meshes_are_refused_with_their_own_status() {
+    let (pos, idx) = grid_soup();
+    let good = desc(&pos, &idx);
+    let mut out = null_mut();
+    assert_eq!(unsafe { plumage_system_create(null(), &good, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    expect_refused(null(), null(), PLUMAGE_STATUS_NULL_POINTER);
+    expect_refused(null(), &PlumageMeshDesc { positions: null(), ..good }, PLUMAGE_STATUS_NULL_POINTER);
+    expect_refused(null(), &PlumageMeshDesc { indices: null(), ..good }, PLUMAGE_STATUS_NULL_POINTER);
+    expect_refused(null(), &PlumageMeshDesc { vertex_count: 0, ..good }, PLUMAGE_STATUS_EMPTY_MESH);
+    expect_refused(null(), &PlumageMeshDesc { triangle_count: 0, ..good }, PLUMAGE_STATUS_EMPTY_MESH);
+    expect_refused(null(), &PlumageMeshDesc { struct_size: 4, ..good }, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
+    expect_refused(null(), &PlumageMeshDesc { struct_size: 0, ..good }, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
+    expect_refused(null(), &PlumageMeshDesc { vertex_count: usize::MAX / 2, ..good }, PLUMAGE_STATUS_SIZE_OVERFLOW);
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        let mut p = pos.clone();
+        p[7] = bad;
+        expect_refused(null(), &desc(&p, &idx), PLUMAGE_STATUS_NON_FINITE);
+    }
+    let mut i = idx.clone();
+    i[5] = (pos.len() / 3) as u32;
+    expect_refused(null(), &desc(&pos, &i), PLUMAGE_STATUS_INDEX_OUT_OF_RANGE);
+    i[5] = u32::MAX;
+    expect_refused(null(), &desc(&pos, &i), PLUMAGE_STATUS_INDEX_OUT_OF_RANGE);
+    let line = [0., 0., 0., 1., 0., 0., 2., 0., 0.];
+    expect_refused(null(), &desc(&line, &[0, 1, 2, 2, 1, 0]), PLUMAGE_STATUS_DEGENERATE_MESH);
+    let spacing = vec![-1.0f32; pos.len() / 3];
+    expect_refused(
+        null(),
+        &PlumageMeshDesc { spacing_scale: spacing.as_ptr(), ..good },
+        PLUMAGE_STATUS_INVALID_ARGUMENT,
+    );
+    // And the good mesh still works afterwards.
+    assert_eq!(unsafe { plumage_system_create(null(), &good, &mut out) }, PLUMAGE_STATUS_OK);
+    unsafe { plumage_system_destroy(out) };
+}
+
+#[test]
+fn some_degenerate_triangles_among_good_ones_are_accepted() {
+    let (mut pos, mut idx) = grid_soup();
+    let base = (pos.len() / 3) as u32;
+    pos.extend_from_slice(&[5., 5., 5., 5., 5., 5., 6., 5., 5.]);
+    idx.extend_from_slice(&[base, base + 1, base + 2, 0, 0, 0]);
+    let sys = create(&pos, &idx);
+    unsafe { plumage_system_destroy(sys) };
+}
+
+#[test]
+fn bad_configs_are_refused() {
+    let (pos, idx) = grid_soup();
+    let d = desc(&pos, &idx);
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+    let cfg = unsafe { cfg.assume_init() };
+    expect_refused(&PlumageConfig { struct_size: 8, ..cfg }, &d, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
+    expect_refused(&PlumageConfig { sampler: 7, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { mode: 3, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { gamma: f32::NAN, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
+    expect_refused(&PlumageConfig { lambda: 0.9, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { spacing: -1.0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { k_neighbours: 0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+}
+
+#[test]
+fn a_larger_struct_size_is_accepted() {
+    // A caller compiled against a future header: more bytes after our fields.
+    #[repr(C)]
+    struct Future {
+        cfg: PlumageConfig,
+        extra: [u64; 8],
+    }
+    #[repr(C)]
+    struct FutureMesh {
+        mesh: PlumageMeshDesc,
+        extra: [u64; 8],
+    }
+    let (pos, idx) = grid_soup();
+    let mut f = Future { cfg: unsafe { std::mem::zeroed() }, extra: [u64::MAX; 8] };
+    unsafe { plumage_config_init(&mut f.cfg) };
+    f.cfg.struct_size = std::mem::size_of::<Future>() as u32;
+    let mut m = FutureMesh { mesh: desc(&pos, &idx), extra: [u64::MAX; 8] };
+    m.mesh.struct_size = std::mem::size_of::<FutureMesh>() as u32;
+    let mut out = null_mut();
+    let st = unsafe { plumage_system_create(&f.cfg, &m.mesh, &mut out) };
+    assert_eq!(st, PLUMAGE_STATUS_OK, "{}", thread_error());
+    unsafe { plumage_system_destroy(out) };
+}
+
+#[test]
+fn bad_frames_are_refused_and_leave_the_system_usable() {
+    let (pos, idx) = grid_soup();
+    let sys = create(&pos, &idx);
+    let n = pos.len() / 3;
+    assert_eq!(unsafe { plumage_system_step(null_mut(), pos.as_ptr(), n) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert_eq!(unsafe { plumage_system_step(sys, null(), n) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert!(!system_error(sys).is_empty());
+    assert_eq!(unsafe { plumage_system_step(sys, pos.as_ptr(), n - 1) }, PLUMAGE_STATUS_VERTEX_COUNT_MISMATCH);
+    assert!(system_error(sys).contains("vertices"), "{}", system_error(sys));
+    assert_eq!(unsafe { plumage_system_step(sys, pos.as_ptr(), usize::MAX / 2) }, PLUMAGE_STATUS_SIZE_OVERFLOW);
+    let mut nan = pos.clone();
+    nan[4] = f32::NAN;
+    assert_eq!(unsafe { plumage_system_step(sys, nan.as_ptr(), n) }, PLUMAGE_STATUS_NON_FINITE);
+    assert_eq!(unsafe { plumage_system_evaluate(sys, nan.as_ptr(), n) }, PLUMAGE_STATUS_NON_FINITE);
+    // Queries with NULL outputs.
+    assert_eq!(unsafe { plumage_system_feather_count(sys, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert_eq!(unsafe { plumage_system_feather_count(null(), null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert_eq!(unsafe { plumage_system_feathers(sys, null_mut(), 0, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    // The system still works and saw none of the refused frames.
+    let moved: Vec<f32> = pos.iter().map(|x| x + 1.0).collect();
+    assert_eq!(unsafe { plumage_system_step(sys, moved.as_ptr(), n) }, PLUMAGE_STATUS_OK);
+    unsafe { plumage_system_destroy(sys) };
+}
+
+#[test]
+fn last_error_truncates_and_reports_the_needed_size() {
+    let mut out = null_mut();
+    assert_eq!(unsafe { plumage_system_create(null(), null(), &mut out) }, PLUMAGE_STATUS_NULL_POINTER);
+    let need = unsafe { plumage_system_last_error(null(), null_mut(), 0) };
+    assert!(need > 1);
+    let mut small = [0x55 as std::ffi::c_char; 4];
+    assert_eq!(unsafe { plumage_system_last_error(null(), small.as_mut_ptr(), 4) }, need);
+    assert_eq!(small[3], 0, "always NUL-terminated");
+    let mut one = [0x55 as std::ffi::c_char; 1];
+    unsafe { plumage_system_last_error(null(), one.as_mut_ptr(), 1) };
+    assert_eq!(one[0], 0);
+}

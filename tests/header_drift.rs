@@ -1,0 +1,54 @@
+//! The committed `include/plumage.h` must be exactly what cbindgen generates
+//! from the sources. To refresh it after changing the C ABI:
+//!   cbindgen --config cbindgen.toml --crate plumage --output include/plumage.h
+//! or run this test with PLUMAGE_BLESS_HEADER=1.
+
+use std::path::Path;
+
+#[test]
+fn committed_header_matches_the_sources() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let config = cbindgen::Config::from_file(root.join("cbindgen.toml")).expect("cbindgen.toml parses");
+    let bindings = cbindgen::Builder::new()
+        .with_crate(root)
+        .with_config(config)
+        .generate()
+        .expect("cbindgen generates the header");
+    let mut generated = Vec::new();
+    bindings.write(&mut generated);
+    let path = root.join("include/plumage.h");
+    if std::env::var_os("PLUMAGE_BLESS_HEADER").is_some() {
+        std::fs::write(&path, &generated).expect("write include/plumage.h");
+        return;
+    }
+    let committed = std::fs::read(&path).expect("include/plumage.h exists");
+    assert!(
+        committed == generated,
+        "include/plumage.h differs from what the sources generate; refresh it with \
+         `cbindgen --config cbindgen.toml --crate plumage --output include/plumage.h`"
+    );
+}
+
+#[test]
+fn header_declares_the_contract() {
+    let raw = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("include/plumage.h")).unwrap();
+    // Compare declarations with whitespace folded and `struct ` tags dropped.
+    let header = raw.split_whitespace().collect::<Vec<_>>().join(" ").replace("struct ", "");
+    for name in [
+        "const char *plumage_version(void)",
+        "uint32_t plumage_abi_version(void)",
+        "const char *plumage_status_name(uint32_t status)",
+        "void plumage_config_init(PlumageConfig *cfg)",
+        "void plumage_mesh_desc_init(PlumageMeshDesc *mesh)",
+        "uint32_t plumage_system_create(const PlumageConfig *cfg, const PlumageMeshDesc *rest, PlumageSystem **out)",
+        "void plumage_system_destroy(PlumageSystem *sys)",
+        "uint32_t plumage_system_step(PlumageSystem *sys, const float *positions, size_t vertex_count)",
+        "uint32_t plumage_system_evaluate(PlumageSystem *sys, const float *positions, size_t vertex_count)",
+        "uint32_t plumage_system_feather_count(const PlumageSystem *sys, size_t *out)",
+        "size_t plumage_system_last_error(const PlumageSystem *sys, char *buf, size_t capacity)",
+        "#define PLUMAGE_H",
+        "Thread safety",
+    ] {
+        assert!(header.contains(name), "header lacks `{name}`");
+    }
+}
