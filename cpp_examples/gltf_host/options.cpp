@@ -60,6 +60,15 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
     bad(option, text, want);
 }
 
+bool takes_value(const std::string& option) {
+    static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
+                                           "--theta", "--seed",     "--flow", "--mode",    "--threads",  "--validate", "--out", "--report"};
+    for (const char* o : kOptions) {
+        if (option == o) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
 const char* validate_name(ValidateWhen when) {
@@ -120,13 +129,15 @@ Options parse_options(int argc, const char* const* argv) {
         }
         std::string value;
         const size_t eq = arg.find('=');
-        if (eq != std::string::npos) {
+        const bool inline_value = eq != std::string::npos;
+        if (inline_value) {
             value = arg.substr(eq + 1);
             arg.resize(eq);
-        } else if (i + 1 < argc) {
+        }
+        if (!takes_value(arg)) throw UsageError("unknown option " + arg);
+        if (!inline_value) {
+            if (i + 1 >= argc) throw UsageError(arg + ": missing value");
             value = argv[++i];
-        } else {
-            throw UsageError(arg + ": missing value");
         }
         if (arg == "--mesh") o.mesh = value;
         else if (arg == "--animation") o.animation = value;
@@ -148,7 +159,6 @@ Options parse_options(int argc, const char* const* argv) {
             o.validate = v == 0 ? ValidateWhen::Every : v == 1 ? ValidateWhen::Last : ValidateWhen::None;
         } else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
-        else throw UsageError("unknown option " + arg);
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
