@@ -13,7 +13,10 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
+pub mod pool;
+pub mod progress;
 pub mod rng;
+pub mod snapshot;
 pub mod stats;
 pub mod system;
 
