@@ -155,10 +155,41 @@
 #define PLUMAGE_MODE_REBUILD 2
 
 /**
+ * Progress phase: checking and welding the mesh, building the surface.
+ */
+#define PLUMAGE_PHASE_PREPARING 0
+
+/**
+ * Progress phase: planting roots.
+ */
+#define PLUMAGE_PHASE_SAMPLING 1
+
+/**
+ * Progress phase: neighbourhoods, priorities and the feather order.
+ */
+#define PLUMAGE_PHASE_ORDERING 2
+
+/**
+ * Progress phase: the height-field adjustment of the feathers.
+ */
+#define PLUMAGE_PHASE_ADJUSTING 3
+
+/**
  * An opaque feathering system. Create with `plumage_system_create`, free
  * with `plumage_system_destroy`.
  */
 typedef struct PlumageSystem PlumageSystem;
+
+/**
+ * Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
+ * completed share of it in [0, 1]. Return 0 to continue; any other value
+ * stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
+ * leaves the system as it was before the call (a stopped create creates
+ * nothing). It is called at least every few milliseconds while the library
+ * works, possibly from one of the system's worker threads, never from two
+ * threads at once. It must not call back into the same system.
+ */
+typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
 /**
  * Parameters of a system. Fill with `plumage_config_init`, then change what
@@ -259,6 +290,14 @@ typedef struct PlumageConfig {
    * Non-zero: recompute neighbourhoods at the current pose every frame.
    */
   uint32_t recompute_neighbourhoods;
+  /**
+   * Optional progress callback for create, step and evaluate (NULL = none).
+   */
+  PlumageProgressFn progress;
+  /**
+   * Passed back to `progress` unchanged.
+   */
+  void *progress_user_data;
 } PlumageConfig;
 
 /**
@@ -649,6 +688,22 @@ uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct Plumage
  * empty string means no failure was recorded.
  */
 size_t plumage_system_last_error(const struct PlumageSystem *sys, char *buf, size_t capacity);
+
+#if defined(PLUMAGE_TEST_HOOKS)
+/**
+ * Test builds only (cargo feature `test-hooks`): makes the next step,
+ * evaluate or validate on `sys` panic inside the library, to prove the
+ * panic boundary. Returns PLUMAGE_STATUS_OK when armed.
+ */
+uint32_t plumage_testing_panic_on_next_call(struct PlumageSystem *sys);
+#endif
+
+#if defined(PLUMAGE_TEST_HOOKS)
+/**
+ * Test builds only (cargo feature `test-hooks`): 1 when `sys` is poisoned, 0 when not.
+ */
+uint32_t plumage_testing_is_poisoned(const struct PlumageSystem *sys);
+#endif
 
 #ifdef __cplusplus
 }  // extern "C"

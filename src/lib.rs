@@ -8,12 +8,16 @@
 //! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
 //! `extern "C"` function, nothing else).
 
+pub mod animation;
 pub mod config;
 pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
+pub mod pool;
+pub mod progress;
 pub mod rng;
+pub mod snapshot;
 pub mod stats;
 pub mod system;
 

@@ -4,6 +4,7 @@
 use crate::config::Config;
 use crate::error::Result;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
+use crate::progress::{Phase, Progress};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 
 /// A feathered surface: created at the rest pose, then stepped frame by frame.
@@ -12,15 +13,43 @@ pub struct System {
     config: Config,
     mesh: WeldedMesh,
     frames_stepped: u64,
+    #[cfg(feature = "test-hooks")]
+    test_panic: std::sync::Arc<std::sync::atomic::AtomicBool>,
 }
 
 impl System {
     /// Checks the configuration and the mesh, and welds the mesh.
     pub fn new(config: &Config, mesh: &MeshInput<'_>) -> Result<Self> {
+        Self::new_with_progress(config, mesh, &Progress::none())
+    }
+
+    /// As [`System::new`], reporting to `progress`, which may stop it.
+    pub fn new_with_progress(config: &Config, mesh: &MeshInput<'_>, progress: &Progress) -> Result<Self> {
         config.validate()?;
+        progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
-        Ok(Self { config: config.clone(), mesh: welded, frames_stepped: 0 })
+        progress.check(Phase::Preparing, 1.0)?;
+        Ok(Self {
+            config: config.clone(),
+            mesh: welded,
+            frames_stepped: 0,
+            #[cfg(feature = "test-hooks")]
+            test_panic: Default::default(),
+        })
+    }
+
+    /// Test builds only: the next step, evaluate or validate panics.
+    #[cfg(feature = "test-hooks")]
+    pub fn arm_test_panic(&mut self) {
+        self.test_panic.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    fn maybe_test_panic(&self) {
+        #[cfg(feature = "test-hooks")]
+        if self.test_panic.swap(false, std::sync::atomic::Ordering::SeqCst) {
+            panic!("forced by plumage_testing_panic_on_next_call");
+        }
     }
 
     /// The configuration the system was created with.
@@ -76,12 +105,20 @@ impl System {
 
     /// Exact validation of the current feathers, once feathers exist.
     pub fn validate(&self) -> Option<ValidationReport> {
+        self.maybe_test_panic();
         None
     }
 
     /// Advances to the next animation frame. On error nothing changes.
     pub fn step(&mut self, positions: &[f32]) -> Result<()> {
+        self.step_with_progress(positions, &Progress::none())
+    }
+
+    /// As [`System::step`], reporting to `progress`, which may stop it.
+    pub fn step_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
+        self.maybe_test_panic();
         check_frame_positions(positions, self.vertex_count())?;
+        progress.check(Phase::Preparing, 0.0)?;
         self.mesh.set_caller_positions(positions);
         self.frames_stepped += 1;
         Ok(())
@@ -89,7 +126,14 @@ impl System {
 
     /// Solves the pose from scratch, independent of history. On error nothing changes.
     pub fn evaluate(&mut self, positions: &[f32]) -> Result<()> {
+        self.evaluate_with_progress(positions, &Progress::none())
+    }
+
+    /// As [`System::evaluate`], reporting to `progress`, which may stop it.
+    pub fn evaluate_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
+        self.maybe_test_panic();
         check_frame_positions(positions, self.vertex_count())?;
+        progress.check(Phase::Preparing, 0.0)?;
         self.mesh.set_caller_positions(positions);
         Ok(())
     }

@@ -7,7 +7,9 @@
 //! no handle (e.g. a refused create).
 
 use super::status::*;
+use super::types::HostProgress;
 use crate::System;
+use crate::progress::Progress;
 use std::any::Any;
 use std::cell::RefCell;
 use std::ffi::CString;
@@ -19,13 +21,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// with `plumage_system_destroy`.
 pub struct PlumageSystem {
     pub(crate) system: System,
+    progress: Option<HostProgress>,
     poisoned: AtomicBool,
     last_error: Mutex<CString>,
 }
 
 impl PlumageSystem {
-    pub(crate) fn new(system: System) -> Self {
-        Self { system, poisoned: AtomicBool::new(false), last_error: Mutex::new(CString::default()) }
+    pub(crate) fn new(system: System, progress: Option<HostProgress>) -> Self {
+        Self { system, progress, poisoned: AtomicBool::new(false), last_error: Mutex::new(CString::default()) }
     }
 
     fn set_error(&self, message: &str) {
@@ -92,8 +95,9 @@ fn panic_message(payload: &(dyn Any + Send)) -> String {
     format!("internal error (panic) in Plumage: {what}; the system is poisoned, destroy it")
 }
 
-/// A call that needs exclusive access to a live system.
-pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System) -> CallResult) -> u32 {
+/// A call that needs exclusive access to a live system; the body gets the
+/// host's progress callback (if any) as a `Progress`.
+pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System, &Progress) -> CallResult) -> u32 {
     if sys.is_null() {
         set_thread_error("system is NULL");
         return PLUMAGE_STATUS_NULL_POINTER;
@@ -105,7 +109,13 @@ pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System
         handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
-    let outcome = catch_unwind(AssertUnwindSafe(|| body(&mut handle.system)));
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        let progress = match &handle.progress {
+            Some(p) => Progress::to(p),
+            None => Progress::none(),
+        };
+        body(&mut handle.system, &progress)
+    }));
     settle(handle, outcome)
 }
 

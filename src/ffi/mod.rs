@@ -79,10 +79,14 @@ pub unsafe extern "C" fn plumage_system_create(
         // SAFETY: non-NULL out (contract: points to a PlumageSystem*).
         unsafe { *out = std::ptr::null_mut() };
         // SAFETY: forwarded pointer contracts of this function.
-        let config = unsafe { types::read_config(cfg) }?;
+        let (config, host_progress) = unsafe { types::read_config(cfg) }?;
         let mesh = unsafe { types::read_mesh(rest) }?;
-        let system = crate::System::new(&config, &mesh)?;
-        let handle = Box::into_raw(Box::new(PlumageSystem::new(system)));
+        let progress = match &host_progress {
+            Some(p) => crate::progress::Progress::to(p),
+            None => crate::progress::Progress::none(),
+        };
+        let system = crate::System::new_with_progress(&config, &mesh, &progress)?;
+        let handle = Box::into_raw(Box::new(PlumageSystem::new(system, host_progress)));
         // SAFETY: as above.
         unsafe { *out = handle };
         Ok(())
@@ -111,10 +115,10 @@ pub unsafe extern "C" fn plumage_system_step(
     positions: *const f32,
     vertex_count: usize,
 ) -> u32 {
-    with_system(sys, |system| {
+    with_system(sys, |system, progress| {
         // SAFETY: forwarded contract.
         let frame = unsafe { frame_positions(positions, vertex_count) }?;
-        system.step(frame)?;
+        system.step_with_progress(frame, progress)?;
         Ok(())
     })
 }
@@ -127,10 +131,10 @@ pub unsafe extern "C" fn plumage_system_evaluate(
     positions: *const f32,
     vertex_count: usize,
 ) -> u32 {
-    with_system(sys, |system| {
+    with_system(sys, |system, progress| {
         // SAFETY: forwarded contract.
         let frame = unsafe { frame_positions(positions, vertex_count) }?;
-        system.evaluate(frame)?;
+        system.evaluate_with_progress(frame, progress)?;
         Ok(())
     })
 }
@@ -345,4 +349,27 @@ unsafe fn frame_positions<'a>(positions: *const f32, vertex_count: usize) -> Res
     let n = types::checked_len(vertex_count, 3, "vertex_count")?;
     // SAFETY: non-NULL, `3 * vertex_count` floats (contract).
     Ok(unsafe { std::slice::from_raw_parts(positions, n) })
+}
+
+/// Test builds only (cargo feature `test-hooks`): makes the next step,
+/// evaluate or validate on `sys` panic inside the library, to prove the
+/// panic boundary. Returns PLUMAGE_STATUS_OK when armed.
+#[cfg(feature = "test-hooks")]
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_testing_panic_on_next_call(sys: *mut PlumageSystem) -> u32 {
+    with_system(sys, |system, _| {
+        system.arm_test_panic();
+        Ok(())
+    })
+}
+
+/// Test builds only (cargo feature `test-hooks`): 1 when `sys` is poisoned, 0 when not.
+#[cfg(feature = "test-hooks")]
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_testing_is_poisoned(sys: *const PlumageSystem) -> u32 {
+    if sys.is_null() {
+        return 0;
+    }
+    // SAFETY: live handle (contract).
+    unsafe { &*sys }.is_poisoned() as u32
 }

@@ -4,6 +4,7 @@ use super::boundary::{Failure, read_versioned};
 use super::status::*;
 use crate::{Config, MeshInput, Mode, SamplerKind};
 use glam::Vec3;
+use std::ffi::c_void;
 
 /// `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
 pub const PLUMAGE_SAMPLER_GUIDED: u32 = 0;
@@ -70,6 +71,60 @@ pub struct PlumageConfig {
     pub flow_axis: [f32; 3],
     /// Non-zero: recompute neighbourhoods at the current pose every frame.
     pub recompute_neighbourhoods: u32,
+    /// Optional progress callback for create, step and evaluate (NULL = none).
+    pub progress: PlumageProgressFn,
+    /// Passed back to `progress` unchanged.
+    pub progress_user_data: *mut c_void,
+}
+
+/// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
+/// completed share of it in [0, 1]. Return 0 to continue; any other value
+/// stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
+/// leaves the system as it was before the call (a stopped create creates
+/// nothing). It is called at least every few milliseconds while the library
+/// works, possibly from one of the system's worker threads, never from two
+/// threads at once. It must not call back into the same system.
+pub type PlumageProgressFn = Option<unsafe extern "C" fn(user_data: *mut c_void, phase: u32, fraction: f32) -> i32>;
+
+/// Progress phase: checking and welding the mesh, building the surface.
+pub const PLUMAGE_PHASE_PREPARING: u32 = 0;
+/// Progress phase: planting roots.
+pub const PLUMAGE_PHASE_SAMPLING: u32 = 1;
+/// Progress phase: neighbourhoods, priorities and the feather order.
+pub const PLUMAGE_PHASE_ORDERING: u32 = 2;
+/// Progress phase: the height-field adjustment of the feathers.
+pub const PLUMAGE_PHASE_ADJUSTING: u32 = 3;
+
+/// The host's callback as a progress sink.
+#[derive(Clone, Copy)]
+pub(crate) struct HostProgress {
+    callback: unsafe extern "C" fn(*mut c_void, u32, f32) -> i32,
+    user_data: *mut c_void,
+}
+
+// SAFETY: the header documents that the callback may run on a worker thread
+// (never two at once: `Progress` serialises calls); the host owns user_data.
+unsafe impl Send for HostProgress {}
+unsafe impl Sync for HostProgress {}
+
+impl HostProgress {
+    pub(crate) fn from_config(cfg: &PlumageConfig) -> Option<Self> {
+        cfg.progress.map(|callback| Self { callback, user_data: cfg.progress_user_data })
+    }
+}
+
+impl crate::progress::ProgressSink for HostProgress {
+    fn report(&self, phase: crate::progress::Phase, fraction: f32) -> bool {
+        use crate::progress::Phase;
+        let code = match phase {
+            Phase::Preparing => PLUMAGE_PHASE_PREPARING,
+            Phase::Sampling => PLUMAGE_PHASE_SAMPLING,
+            Phase::Ordering => PLUMAGE_PHASE_ORDERING,
+            Phase::Adjusting => PLUMAGE_PHASE_ADJUSTING,
+        };
+        // SAFETY: a host function pointer with the documented signature.
+        unsafe { (self.callback)(self.user_data, code, fraction) == 0 }
+    }
 }
 
 /// The size of the first published `PlumageConfig`; smaller is refused.
@@ -152,6 +207,8 @@ impl PlumageConfig {
             theta_s: c.theta_s,
             flow_axis: c.flow_axis.to_array(),
             recompute_neighbourhoods: c.recompute_neighbourhoods as u32,
+            progress: None,
+            progress_user_data: std::ptr::null_mut(),
         }
     }
 
@@ -222,13 +279,14 @@ impl PlumageConfig {
 ///
 /// # Safety
 /// `cfg` is NULL or points to a `PlumageConfig` of at least `struct_size` bytes.
-pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<Config, Failure> {
+pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<(Config, Option<HostProgress>), Failure> {
     if cfg.is_null() {
-        return Ok(Config::default());
+        return Ok((Config::default(), None));
     }
     let defaults = PlumageConfig::from_config(&Config::default());
     // SAFETY: forwarded contract.
-    unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?.to_config()
+    let raw = unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?;
+    Ok((raw.to_config()?, HostProgress::from_config(&raw)))
 }
 
 /// Borrowed view of the caller's mesh arrays.

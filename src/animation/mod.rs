@@ -1,0 +1,3 @@
+//! Animation (paper §3.3, DESIGN.md §5): what changed between two frames.
+
+pub mod affine;
