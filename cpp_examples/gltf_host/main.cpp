@@ -84,13 +84,17 @@ int run(int argc, const char* const* argv) {
     const double load_seconds = load_clock.seconds();
     const std::optional<ClipInfo> clip = subject->clip();
     const std::vector<double> times = frame_times(opt, clip);
-    const PlumageConfig cfg = make_config(opt);
+    ProgressLine progress;
+    PlumageConfig cfg = make_config(opt);
+    cfg.progress = &ProgressLine::library_callback;
+    cfg.progress_user_data = &progress;
 
     Report report;
     report.set_subject(opt.input.empty() ? "builtin:procedural_body" : opt.input, subject->mesh_name(), subject->vertex_count(),
                        subject->triangle_count(), run_config(cfg, opt, clip, times.size()));
     report.set_timing("load_seconds", load_seconds);
 
+    progress.set_context("rest pose");
     const Stopwatch create_clock;
     const SystemHandle sys = create_system(cfg, subject->rest_positions(), subject->triangles());
     report.set_timing("create_seconds", create_clock.seconds());
@@ -104,12 +108,12 @@ int run(int argc, const char* const* argv) {
     std::optional<AnimationRecorder> recorder;
     if (!opt.out.empty()) recorder.emplace(subject->rest_positions(), subject->triangles(), feathers(*sys), feather_triangles(*sys));
 
-    ProgressLine progress;
     const Stopwatch frames_clock;
     std::vector<float> pose;
     double step_total = 0;
     for (size_t k = 0; k < times.size(); ++k) {
         subject->pose_at(times[k], pose);
+        progress.set_context("frame " + std::to_string(k + 1) + "/" + std::to_string(times.size()));
         const Stopwatch step_clock;
         check(plumage_system_step(sys.get(), pose.data(), pose.size() / 3), sys.get(), "plumage_system_step");
         const double step_seconds = step_clock.seconds();
@@ -117,7 +121,7 @@ int run(int argc, const char* const* argv) {
         const std::optional<PlumageValidation> v = validate_frame(opt.validate, k, times.size()) ? validate(*sys) : std::nullopt;
         report.add_frame(k, times[k], step_seconds, frame_stats(*sys), v);
         if (recorder) recorder->add_frame(times[k], pose, feathers(*sys), feather_triangles(*sys));
-        progress.update(k + 1, times.size(), step_seconds);
+        progress.frame_done(k + 1, times.size(), step_seconds);
     }
     progress.clear();
     report.set_timing("frames_seconds", frames_clock.seconds());
