@@ -13,8 +13,10 @@ namespace {
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "glTF buffers are little-endian; this reader assumes a little-endian host");
 
-// Far above any real mesh, low enough that element counts times strides never overflow.
-constexpr size_t kMaxElements = size_t{1} << 28;
+// Far above any real mesh, low enough that element counts times strides
+// never overflow and that an accessor without a buffer view (all zeros, so
+// its count costs nothing in the file) cannot ask for gigabytes.
+constexpr size_t kMaxValues = size_t{1} << 26;
 
 struct Bytes {
     const unsigned char* data = nullptr;
@@ -162,7 +164,7 @@ AccessorData read_accessor(const tinygltf::Model& model, int index, const std::s
     if ((acc.type == TINYGLTF_TYPE_MAT2 || acc.type == TINYGLTF_TYPE_MAT3) && csize < 4) {
         fail(what, "padded small-component matrices are not supported");
     }
-    if (acc.count > kMaxElements) fail(what, "accessor count " + std::to_string(acc.count) + " is too large");
+    if (acc.count > kMaxValues / static_cast<size_t>(components)) fail(what, "accessor count " + std::to_string(acc.count) + " is too large");
     const size_t element_size = csize * static_cast<size_t>(components);
 
     AccessorData data;

@@ -22,6 +22,11 @@ int attribute(const std::map<std::string, int>& attributes, const std::string& n
 
 int attribute(const tinygltf::Primitive& p, const std::string& name) { return attribute(p.attributes, name); }
 
+const tinygltf::Accessor& accessor_at(const tinygltf::Model& model, int index, const std::string& what) {
+    if (index < 0 || static_cast<size_t>(index) >= model.accessors.size()) throw InputError(what + ": accessor " + std::to_string(index) + " does not exist");
+    return model.accessors[static_cast<size_t>(index)];
+}
+
 size_t accessor_count(const tinygltf::Model& model, int index) {
     return index >= 0 && static_cast<size_t>(index) < model.accessors.size() ? model.accessors[static_cast<size_t>(index)].count : 0;
 }
@@ -224,7 +229,8 @@ void GltfScene::load_primitive(const tinygltf::Model& model, size_t index, size_
     require_finite(positions.values, what + " POSITION");
     const size_t nv = positions.count;
     const size_t offset = base_positions_.size() / 3;
-    if (offset + nv > (size_t{1} << 31)) throw InputError(what + ": too many vertices");
+    // Every morph target keeps a full copy of the positions: bound the total.
+    if ((offset + nv) * 3 * std::max<size_t>(target_count, 1) > (size_t{1} << 26)) throw InputError(what + ": too many vertices or morph targets");
 
     std::vector<uint32_t> local;
     if (p.indices >= 0) {
@@ -286,8 +292,8 @@ void GltfScene::load_skin_weights(const tinygltf::Model& model, size_t index, si
             if (set == 0) throw InputError(what + ": skinned but has no JOINTS_0 and WEIGHTS_0");
             break;
         }
-        const tinygltf::Accessor& ja = model.accessors.at(static_cast<size_t>(joints));
-        const tinygltf::Accessor& wa = model.accessors.at(static_cast<size_t>(weights));
+        const tinygltf::Accessor& ja = accessor_at(model, joints, what + " JOINTS_" + n);
+        const tinygltf::Accessor& wa = accessor_at(model, weights, what + " WEIGHTS_" + n);
         if (ja.normalized || (ja.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ja.componentType != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT)) {
             throw InputError(what + " JOINTS_" + n + ": must be unsigned bytes or shorts");
         }

@@ -170,7 +170,9 @@ GltfFixture morph_cube() {
     const int idx = f.u8({0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5}, "SCALAR");
     const int t0 = f.floats(d0, "VEC3");
     const int t1 = f.accessor(-1, kFloat, 8, "VEC3");
+    f.bounds(t1, {0, 0, 0}, 3);
     const int t2 = f.accessor(-1, kFloat, 8, "VEC3");
+    f.bounds(t2, {0, 0, 0, 0, 0, 2}, 3);
     f.doc()["accessors"][t2]["sparse"] = {{"count", 1},
                                           {"indices", {{"bufferView", f.view(std::vector<uint8_t>{7, 0, 0, 0})}, {"componentType", kUByte}}},
                                           {"values", {{"bufferView", f.view(std::vector<float>{0, 0, 2})}}}};
@@ -293,6 +295,7 @@ void sparse_positions() {
         f.doc()["accessors"][pos]["sparse"] = {{"count", 2},
                                                {"indices", {{"bufferView", ind}, {"componentType", index_type}, {"byteOffset", index_type == kUByte ? 0 : 2}}},
                                                {"values", {{"bufferView", val}, {"byteOffset", 12}}}};
+        f.bounds(pos, {0, 0, 0, 4, 0, 0, 0, 4, 0}, 3);
         f.add("meshes", {{"primitives", {{{"attributes", {{"POSITION", pos}}}}}}});
         f.single_node_scene(0);
         const GltfScene s = open(f, "sparse.glb");
@@ -311,6 +314,8 @@ void byte_stride() {
     const int normal = f.accessor(v, kFloat, 3, "VEC3", 12);
     const int tv = f.view(std::vector<float>{0, 0, 1, 7, 0, 0, 2, 7, 0, 0, 3, 7}, 16);
     const int target = f.accessor(tv, kFloat, 3, "VEC3");
+    f.bounds(pos, {0, 0, 0, 1, 1, 0}, 3);
+    f.bounds(target, {0, 0, 1, 0, 0, 3}, 3);
     f.add("meshes", {{"primitives", {{{"attributes", {{"POSITION", pos}, {"NORMAL", normal}}}, {"targets", {{{"POSITION", target}}}}}}}, {"weights", {1}}});
     f.single_node_scene(0);
     const GltfScene s = open(f, "stride.gltf", "", "", GltfFormat::External);
@@ -323,6 +328,8 @@ void quantized_positions() {
     // KHR_mesh_quantization: normalized shorts (32767 -> 1), scaled back by the node.
     GltfFixture f;
     const int pos = f.accessor(f.view(std::vector<int16_t>{0, 0, 0, 0, 32767, 0, 0, 0, 0, 32767, 0, 0}, 8), kShort, 3, "VEC3", 0, true);
+    f.doc()["accessors"][pos]["min"] = {0, 0, 0};
+    f.doc()["accessors"][pos]["max"] = {32767, 32767, 0};
     f.add("meshes", {{"primitives", {{{"attributes", {{"POSITION", pos}}}}}}});
     f.single_node_scene(0);
     f.doc()["nodes"][0]["scale"] = {2, 2, 2};

@@ -1,5 +1,6 @@
 #include "gltf_fixture.h"
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -66,7 +67,19 @@ size_t components(const std::string& type) {
 }  // namespace
 
 int GltfFixture::floats(const std::vector<float>& values, const std::string& type) {
-    return accessor(view(values), kFloat, values.size() / components(type), type);
+    const size_t n = components(type);
+    const int index = accessor(view(values), kFloat, values.size() / n, type);
+    bounds(index, values, n);
+    return index;
+}
+
+void GltfFixture::bounds(int accessor, const std::vector<float>& values, size_t n) {
+    // min and max per component (required for POSITION and animation inputs).
+    std::vector<float> lo(values.begin(), values.begin() + static_cast<long>(std::min(n, values.size())));
+    std::vector<float> hi = lo;
+    for (size_t i = 0; i < values.size(); ++i) lo[i % n] = std::min(lo[i % n], values[i]), hi[i % n] = std::max(hi[i % n], values[i]);
+    doc_["accessors"][static_cast<size_t>(accessor)]["min"] = lo;
+    doc_["accessors"][static_cast<size_t>(accessor)]["max"] = hi;
 }
 int GltfFixture::u8(const std::vector<uint8_t>& values, const std::string& type, bool normalized) {
     return accessor(view(values), kUByte, values.size() / components(type), type, 0, normalized);

@@ -28,8 +28,10 @@ public:
     // An accessor on `view` (-1: no buffer view). `type` is "SCALAR", "VEC3", ...
     int accessor(int view, int component_type, size_t count, const std::string& type, size_t byte_offset = 0, bool normalized = false);
 
-    // Tightly packed float data as a new view and accessor.
+    // Tightly packed float data as a new view and accessor, with min and max.
     int floats(const std::vector<float>& values, const std::string& type);
+    // Sets an accessor's min and max from the values it reads (n per element).
+    void bounds(int accessor, const std::vector<float>& values, size_t n);
     int u8(const std::vector<uint8_t>& values, const std::string& type, bool normalized = false);
     int u16(const std::vector<uint16_t>& values, const std::string& type, bool normalized = false);
 
