@@ -11,9 +11,13 @@
 pub mod config;
 pub mod error;
 pub mod ffi;
+pub mod field;
 pub mod geometry;
 pub mod mesh;
 pub mod rng;
+pub mod roots;
+pub mod sampling;
+pub mod surface;
 pub mod system;
 
 pub use config::{Config, Mode, SamplerKind};
