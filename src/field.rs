@@ -120,11 +120,11 @@ impl Fields {
     pub fn spacing_scale_at(&self, surface: &Surface, p: SurfacePoint) -> Option<f32> {
         let tri = surface.triangles()[p.face as usize];
         let (mut presence, mut blend) = (0.0f32, 0.0f32);
-        for k in 0..3 {
-            let s = self.spacing_scale[tri[k] as usize];
+        for (&v, &w) in tri.iter().zip(&p.bary) {
+            let s = self.spacing_scale[v as usize];
             if s > 0.0 {
-                presence += p.bary[k];
-                blend += p.bary[k] * s;
+                presence += w;
+                blend += w * s;
             }
         }
         (presence >= 0.5).then(|| blend / presence)

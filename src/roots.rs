@@ -45,7 +45,7 @@ pub fn edge_basis_coordinates(corners: [Vec3; 3], direction: Vec3) -> [f32; 2] {
     let (e1, e2) = (p1 - p0, p2 - p0);
     let area_vector = e1.cross(e2);
     let twice_area2 = area_vector.length_squared();
-    if !(twice_area2 > 0.0) || !twice_area2.is_finite() {
+    if twice_area2.is_nan() || twice_area2 <= 0.0 || !twice_area2.is_finite() {
         return [0.0, 0.0];
     }
     // v = a e1 + b e2  ⇒  v × e2 = a (e1 × e2),  e1 × v = b (e1 × e2).

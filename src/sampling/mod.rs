@@ -36,8 +36,8 @@ pub(crate) const DEFAULT_TARGET_FEATHERS: usize = 2000;
 
 /// Roots per `d²` of (density-weighted) area each sampler typically packs;
 /// only the first guess of the spacing search uses them.
-const GUIDED_PACKING: f64 = 1.0;
-const RANDOM_PACKING: f64 = 0.7;
+const GUIDED_PACKING: f64 = 0.75;
+const RANDOM_PACKING: f64 = 0.67;
 
 /// Spacing search: at most this many sampling passes, stopping early once
 /// the count is within this relative error of the target.
@@ -80,7 +80,7 @@ pub fn sample_roots(mesh: &WeldedMesh, surface: &Surface, fields: &Fields, confi
     surface.vertex_normals(positions, &mut normals);
     let density = DensityField::new(surface, fields, positions, &normals);
     let target = if config.target_feathers > 0 { config.target_feathers } else { DEFAULT_TARGET_FEATHERS };
-    let (spacing, points, samples) = if !(density.effective_area() > 0.0) {
+    let (spacing, points, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
         (if config.spacing > 0.0 { config.spacing } else { nominal }, Vec::new(), Vec::new())
     } else if config.spacing > 0.0 {

@@ -73,7 +73,7 @@ impl<'a> DensityField<'a> {
             };
             let feathered: Vec<f32> = tri.iter().map(|&v| scales[v as usize]).filter(|&s| s > 0.0).collect();
             let lo = feathered.iter().copied().fold(f32::INFINITY, f32::min);
-            if feathered.is_empty() || !(area > 0.0) {
+            if feathered.is_empty() || area.is_nan() || area <= 0.0 {
                 min_scale.push(0.0);
             } else {
                 let mean_inv2 =
@@ -96,7 +96,7 @@ impl<'a> DensityField<'a> {
     /// `seed` whatever the thread count.
     pub(crate) fn draw_pool(&self, d: f32, count: usize, seed: u64) -> Vec<PoolPoint> {
         let total = self.cdf.last().copied().unwrap_or(0.0);
-        if count == 0 || !(total > 0.0) {
+        if count == 0 || total.is_nan() || total <= 0.0 {
             return Vec::new();
         }
         let blocks = count.div_ceil(POOL_BLOCK);

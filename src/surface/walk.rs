@@ -135,14 +135,14 @@ impl Tracer {
     fn bary_velocity(&mut self, p: [DVec3; 3]) -> Option<[f64; 3]> {
         let area_vector = (p[1] - p[0]).cross(p[2] - p[0]);
         let twice_area = area_vector.length();
-        if !(twice_area > 0.0) || !twice_area.is_finite() {
+        if twice_area.is_nan() || twice_area <= 0.0 || !twice_area.is_finite() {
             return None;
         }
         let n = area_vector / twice_area;
         let tangential = self.direction - n * self.direction.dot(n);
         let length = tangential.length();
         // A direction within ~1e-9 rad of the normal carries no tangent information.
-        if !(length > 1e-9 * self.direction.length()) || !length.is_finite() {
+        if length.is_nan() || length <= 1e-9 * self.direction.length() || !length.is_finite() {
             return None;
         }
         let v = tangential / length;
