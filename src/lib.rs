@@ -13,6 +13,7 @@ pub mod error;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
+pub mod ordering;
 pub mod rng;
 pub mod system;
 
