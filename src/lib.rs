@@ -15,6 +15,7 @@ pub mod ffi;
 pub mod field;
 pub mod geometry;
 pub mod mesh;
+pub mod ordering;
 pub mod pool;
 pub mod progress;
 pub mod rng;
