@@ -12,13 +12,18 @@ pub mod animation;
 pub mod config;
 pub mod error;
 pub mod ffi;
+pub mod field;
 pub mod geometry;
 pub mod mesh;
+pub mod ordering;
 pub mod pool;
 pub mod progress;
 pub mod rng;
+pub mod roots;
+pub mod sampling;
 pub mod snapshot;
 pub mod stats;
+pub mod surface;
 pub mod system;
 
 pub use config::{Config, Mode, SamplerKind};

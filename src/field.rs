@@ -1,0 +1,289 @@
+//! The orientation and density fields on the welded mesh (DESIGN.md §3).
+//!
+//! Orientation: one unit tangent per welded vertex at the rest pose. Host
+//! hints are projected onto each vertex's tangent plane; without hints the
+//! config's flow axis is projected instead and the result smoothed. Where
+//! the projection is degenerate (normal ∥ hint or axis) the direction is
+//! filled from neighbouring vertices.
+//!
+//! Density: the global spacing `d` times a per-vertex multiplier; a
+//! multiplier of 0 marks bare skin. Across a face, "bare" and "spacing" are
+//! blended separately, so a bare vertex never pulls the spacing towards 0
+//! (which would mean *denser* roots): a point is bare when the barycentric
+//! weight of its bare corners exceeds ½, and elsewhere its multiplier is the
+//! blend of the feathered corners' multipliers alone.
+
+use crate::config::Config;
+use crate::error::{Error, ErrorKind, Result};
+use crate::geometry::SurfacePoint;
+use crate::mesh::WeldedMesh;
+use crate::surface::Surface;
+use glam::Vec3;
+
+/// Tangent projections shorter than this fraction of the projected vector
+/// are degenerate (the vector is within ~3° of the normal).
+const DEGENERATE_TANGENT: f32 = 0.05;
+
+/// Smoothing passes over a field derived from the flow axis.
+const SMOOTHING_ITERATIONS: usize = 4;
+
+/// Per-vertex fields of one welded mesh.
+#[derive(Clone, Debug)]
+pub struct Fields {
+    directions: Vec<Vec3>,
+    spacing_scale: Vec<f32>,
+    length_scale: Vec<f32>,
+    width_scale: Vec<f32>,
+}
+
+impl Fields {
+    /// Builds the fields. All arrays are per *welded* vertex (use
+    /// [`WeldedMesh::weld_attribute`]): `orientations` holds xyz tangent
+    /// hints, the others one multiplier each (finite, ≥ 0). Missing
+    /// multipliers are 1; missing hints are derived from `config.flow_axis`.
+    pub fn new(
+        mesh: &WeldedMesh,
+        surface: &Surface,
+        orientations: Option<&[f32]>,
+        spacing_scale: Option<&[f32]>,
+        length_scale: Option<&[f32]>,
+        width_scale: Option<&[f32]>,
+        config: &Config,
+    ) -> Result<Self> {
+        let n = mesh.positions.len();
+        if surface.vertex_count() != n {
+            return Err(Error::new(
+                ErrorKind::InvalidArgument,
+                format!("surface has {} vertices but the welded mesh has {n}", surface.vertex_count()),
+            ));
+        }
+        let normals = surface.rest_vertex_normals();
+        let directions = match orientations {
+            Some(hints) => {
+                check_values("orientations", hints, 3 * n, false)?;
+                let hints: Vec<Vec3> = hints.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+                let mut dirs = project_onto_tangent_planes(&hints, normals);
+                fill_from_neighbours(surface, normals, &mut dirs);
+                dirs.into_iter().map(Option::unwrap).collect()
+            }
+            None => {
+                let axis = config.flow_axis;
+                if !axis.is_finite() || axis.length_squared() == 0.0 {
+                    return Err(Error::new(ErrorKind::InvalidArgument, "config.flow_axis must be finite and non-zero"));
+                }
+                let mut dirs = project_onto_tangent_planes(&vec![axis; n], normals);
+                fill_from_neighbours(surface, normals, &mut dirs);
+                let dirs = dirs.into_iter().map(Option::unwrap).collect();
+                smooth_directions(surface, normals, dirs, SMOOTHING_ITERATIONS)
+            }
+        };
+        Ok(Self {
+            directions,
+            spacing_scale: multiplier("spacing_scale", spacing_scale, n)?,
+            length_scale: multiplier("length_scale", length_scale, n)?,
+            width_scale: multiplier("width_scale", width_scale, n)?,
+        })
+    }
+
+    /// Unit rest tangent direction of each welded vertex.
+    pub fn vertex_directions(&self) -> &[Vec3] {
+        &self.directions
+    }
+
+    /// Spacing multiplier of each welded vertex (0 = bare skin).
+    pub fn vertex_spacing_scales(&self) -> &[f32] {
+        &self.spacing_scale
+    }
+
+    /// Whether any vertex carries feathers.
+    pub fn any_feathered(&self) -> bool {
+        self.spacing_scale.iter().any(|&s| s > 0.0)
+    }
+
+    /// The field direction at `p`, as a unit vector in the plane normal to
+    /// `normal`: the barycentric blend of the corner directions, projected;
+    /// where the blend cancels, the dominant corner's direction; failing
+    /// that, any tangent.
+    pub fn direction_at(&self, surface: &Surface, p: SurfacePoint, normal: Vec3) -> Vec3 {
+        let tri = surface.triangles()[p.face as usize];
+        let blend = (0..3).fold(Vec3::ZERO, |acc, k| acc + self.directions[tri[k] as usize] * p.bary[k]);
+        let project = |v: Vec3| (v - normal * v.dot(normal)).try_normalize();
+        project(blend)
+            .or_else(|| {
+                let k = (0..3).max_by(|&a, &b| p.bary[a].total_cmp(&p.bary[b])).unwrap_or(0);
+                project(self.directions[tri[k] as usize])
+            })
+            .unwrap_or_else(|| normal.any_orthonormal_vector())
+    }
+
+    /// The spacing multiplier at `p`, or `None` where the skin is bare.
+    pub fn spacing_scale_at(&self, surface: &Surface, p: SurfacePoint) -> Option<f32> {
+        let tri = surface.triangles()[p.face as usize];
+        let (mut presence, mut blend) = (0.0f32, 0.0f32);
+        for (&v, &w) in tri.iter().zip(&p.bary) {
+            let s = self.spacing_scale[v as usize];
+            if s > 0.0 {
+                presence += w;
+                blend += w * s;
+            }
+        }
+        (presence >= 0.5).then(|| blend / presence)
+    }
+
+    /// The feather length multiplier at `p` (barycentric blend).
+    pub fn length_scale_at(&self, surface: &Surface, p: SurfacePoint) -> f32 {
+        blend_at(&self.length_scale, surface, p)
+    }
+
+    /// The feather width multiplier at `p` (barycentric blend).
+    pub fn width_scale_at(&self, surface: &Surface, p: SurfacePoint) -> f32 {
+        blend_at(&self.width_scale, surface, p)
+    }
+
+    /// The median positive per-vertex spacing multiplier (1 when none).
+    pub(crate) fn median_spacing_scale(&self) -> f32 {
+        let mut positive: Vec<f32> = self.spacing_scale.iter().copied().filter(|&s| s > 0.0).collect();
+        if positive.is_empty() {
+            return 1.0;
+        }
+        positive.sort_unstable_by(f32::total_cmp);
+        positive[positive.len() / 2]
+    }
+}
+
+fn blend_at(values: &[f32], surface: &Surface, p: SurfacePoint) -> f32 {
+    let tri = surface.triangles()[p.face as usize];
+    (0..3).map(|k| values[tri[k] as usize] * p.bary[k]).sum()
+}
+
+fn multiplier(name: &str, values: Option<&[f32]>, n: usize) -> Result<Vec<f32>> {
+    match values {
+        None => Ok(vec![1.0; n]),
+        Some(v) => {
+            check_values(name, v, n, true)?;
+            Ok(v.to_vec())
+        }
+    }
+}
+
+fn check_values(name: &str, values: &[f32], expected: usize, non_negative: bool) -> Result<()> {
+    if values.len() != expected {
+        return Err(Error::new(
+            ErrorKind::InvalidArgument,
+            format!("{name} holds {} values, expected {expected} (per welded vertex)", values.len()),
+        ));
+    }
+    if let Some((i, x)) = values.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(Error::new(ErrorKind::NonFinite, format!("{name}[{i}] is {x}")));
+    }
+    if non_negative {
+        if let Some((i, x)) = values.iter().enumerate().find(|(_, x)| **x < 0.0) {
+            return Err(Error::new(ErrorKind::InvalidArgument, format!("{name}[{i}] is {x}; it must be >= 0")));
+        }
+    }
+    Ok(())
+}
+
+/// Each vector projected onto its vertex's tangent plane and normalised;
+/// `None` where the projection is degenerate.
+fn project_onto_tangent_planes(vectors: &[Vec3], normals: &[Vec3]) -> Vec<Option<Vec3>> {
+    vectors
+        .iter()
+        .zip(normals)
+        .map(|(&v, &n)| {
+            let t = v - n * v.dot(n);
+            (t.length() > DEGENERATE_TANGENT * v.length()).then(|| t.normalize())
+        })
+        .collect()
+}
+
+/// Fills degenerate directions from already known neighbours, one ring at a
+/// time (each ring reads only the previous state, so the result does not
+/// depend on visiting order). Vertices of a component with no known
+/// direction get an arbitrary tangent.
+fn fill_from_neighbours(surface: &Surface, normals: &[Vec3], dirs: &mut [Option<Vec3>]) {
+    loop {
+        let fills: Vec<(usize, Vec3)> = (0..dirs.len())
+            .filter(|&v| dirs[v].is_none())
+            .filter_map(|v| {
+                let n = normals[v];
+                let sum = surface
+                    .vertex_neighbours(v)
+                    .iter()
+                    .filter_map(|&u| dirs[u as usize])
+                    .fold(Vec3::ZERO, |a, d| a + d);
+                let known = surface.vertex_neighbours(v).iter().any(|&u| dirs[u as usize].is_some());
+                known
+                    .then(|| (sum - n * sum.dot(n)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector()))
+                    .map(|d| (v, d))
+            })
+            .collect();
+        if fills.is_empty() {
+            break;
+        }
+        for (v, d) in fills {
+            dirs[v] = Some(d);
+        }
+    }
+    for (v, d) in dirs.iter_mut().enumerate() {
+        if d.is_none() {
+            *d = Some(normals[v].any_orthonormal_vector());
+        }
+    }
+}
+
+/// Jacobi smoothing: each vertex takes the sum of its own and its
+/// neighbours' directions, projected onto its tangent plane.
+fn smooth_directions(surface: &Surface, normals: &[Vec3], mut dirs: Vec<Vec3>, iterations: usize) -> Vec<Vec3> {
+    for _ in 0..iterations {
+        dirs = (0..dirs.len())
+            .map(|v| {
+                let n = normals[v];
+                let sum = surface.vertex_neighbours(v).iter().fold(dirs[v], |a, &u| a + dirs[u as usize]);
+                (sum - n * sum.dot(n)).try_normalize().unwrap_or(dirs[v])
+            })
+            .collect();
+    }
+    dirs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{MeshInput, weld};
+
+    fn plate() -> WeldedMesh {
+        let pos = [0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.];
+        weld(&MeshInput::new(&pos, &[0, 1, 2, 0, 2, 3])).unwrap()
+    }
+
+    #[test]
+    fn flow_axis_is_projected_and_degenerate_axis_is_filled() {
+        let mesh = plate();
+        let s = Surface::new(&mesh);
+        let cfg = Config { flow_axis: Vec3::new(1.0, 0.0, 5.0), ..Config::default() };
+        let f = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap();
+        for d in f.vertex_directions() {
+            assert!((*d - Vec3::X).length() < 1e-5, "{d:?}");
+        }
+        // Axis along the normal everywhere: still unit tangents, no NaN.
+        let cfg = Config { flow_axis: Vec3::Z, ..Config::default() };
+        let f = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap();
+        for d in f.vertex_directions() {
+            assert!((d.length() - 1.0).abs() < 1e-5 && d.z.abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn bare_corners_do_not_shrink_the_spacing() {
+        let mesh = plate();
+        let s = Surface::new(&mesh);
+        let scale = [0.0, 2.0, 2.0, 2.0];
+        let f = Fields::new(&mesh, &s, None, Some(&scale), None, None, &Config::default()).unwrap();
+        let near_bare = SurfacePoint { face: 0, bary: [0.4, 0.3, 0.3] };
+        assert_eq!(f.spacing_scale_at(&s, near_bare), Some(2.0));
+        let bare = SurfacePoint { face: 0, bary: [0.6, 0.2, 0.2] };
+        assert_eq!(f.spacing_scale_at(&s, bare), None);
+        assert!(Fields::new(&mesh, &s, None, Some(&[1.0; 3]), None, None, &Config::default()).is_err());
+    }
+}

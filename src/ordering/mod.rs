@@ -1,0 +1,32 @@
+//! Who lies on whom: growth priority and the feather order (paper §2.1–2.2,
+//! §3.2–3.3; DESIGN §4, §5).
+//!
+//! * [`Neighbourhoods`]: k-nearest roots, the symmetric pair set and obstacle
+//!   candidates at the current pose.
+//! * [`Priorities`]: the priority difference `ΔP_AB` (Eq. 3, or Eq. 2 for the
+//!   legacy mode).
+//! * [`PriorityOrder`]: the priority DAG and its topological order, built once
+//!   by [`PriorityOrder::build_static`] and kept up to date frame by frame by
+//!   [`PriorityOrder::update_frame`] (dynamic topological order with the
+//!   paper's cycle rule).
+//!
+//! A frame loop (incremental mode) does, per frame:
+//! 1. re-pose the roots; if neighbourhoods are recomputed,
+//!    [`Neighbourhoods::rebuild`];
+//! 2. find `R_k` and collect the changed pairs with
+//!    [`Priorities::changed_pairs_of_roots`];
+//! 3. [`PriorityOrder::update_frame`]`(Some(neighbourhoods.pairs()), &changed, |a, b| priorities.delta(a, b))`;
+//! 4. readjust `R_k ∪` [`PriorityOrder::became_prior`] in [`PriorityOrder::order`].
+//!
+//! Nothing here uses threads: every result is the same on any pool.
+
+mod dynamic_order;
+mod kd_tree;
+mod neighbours;
+mod priority;
+mod static_order;
+
+pub use dynamic_order::{PriorityOrder, ReorderStats};
+pub use neighbours::{NeighbourParams, Neighbourhoods};
+pub use priority::{Priorities, PriorityRule, directed_priority_eq2, directed_priority_eq3};
+pub use static_order::StaticReport;

@@ -1,0 +1,214 @@
+//! Neighbourhoods of feather roots at the current pose (paper §2.1, DESIGN §1):
+//! the k nearest roots `N_i`, the symmetric pair set on which priorities are
+//! compared, and the wider obstacle candidates `|r_i − r_j| ≤ L_i + L_j`.
+//!
+//! Everything is stored CSR-style (row offsets + flat indices) in buffers
+//! that [`Neighbourhoods::rebuild`] clears and refills, so recomputing them
+//! every frame allocates nothing once the buffers have grown to the root
+//! count. A k-d tree (not a uniform grid) is used because root density
+//! varies over a body by the density field; the tree needs no cell size.
+//!
+//! Thin parts (the two skins of a wing) put roots close in space that are far
+//! apart on the surface. Roots whose normals disagree strongly
+//! (`n_i·n_j < min_normal_dot`) are never neighbours, pairs or obstacle
+//! candidates of each other.
+
+use super::kd_tree::KdTree;
+use crate::geometry::RootFrame;
+
+/// Parameters of the neighbourhood search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NeighbourParams {
+    /// k of the k-nearest-root neighbourhoods (`config.k_neighbours`, default 10).
+    pub k: usize,
+    /// Roots `i, j` with `n_i·n_j` below this are never related. The default
+    /// −0.5 (normals more than 120° apart) separates the skins of thin parts
+    /// while keeping neighbours across sharp creases; `f32::NEG_INFINITY`
+    /// disables the test.
+    pub min_normal_dot: f32,
+}
+
+impl Default for NeighbourParams {
+    fn default() -> Self {
+        Self { k: 10, min_normal_dot: -0.5 }
+    }
+}
+
+/// k-nearest neighbourhoods, the symmetric pair set and obstacle candidates
+/// of one pose. Create once, call [`rebuild`](Self::rebuild) every frame.
+#[derive(Clone, Debug, Default)]
+pub struct Neighbourhoods {
+    tree: KdTree,
+    knn_offsets: Vec<u32>,
+    knn_indices: Vec<u32>,
+    pairs: Vec<(u32, u32)>,
+    obstacle_offsets: Vec<u32>,
+    obstacle_indices: Vec<u32>,
+    best: Vec<(f32, u32)>,
+    bucket_offsets: Vec<u32>,
+    bucket_items: Vec<u32>,
+    fill_cursor: Vec<u32>,
+}
+
+impl Neighbourhoods {
+    /// Empty neighbourhoods (no roots).
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Recomputes everything for the roots `frames` at the current pose.
+    /// `reach[i]` is the feather length `L_i` of root `i`; pass an empty
+    /// slice to skip the obstacle candidates (all their rows are then empty).
+    ///
+    /// # Panics
+    /// If `reach` is neither empty nor as long as `frames`, or there are more
+    /// than `u32::MAX` roots.
+    pub fn rebuild(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+        assert!(u32::try_from(frames.len()).is_ok(), "too many roots for u32 indices");
+        assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
+        self.tree.rebuild(frames.iter().map(|f| f.position));
+        self.rebuild_nearest(frames, params);
+        self.rebuild_pairs(frames.len());
+        self.rebuild_obstacles(frames, reach, params);
+    }
+
+    /// Number of roots of the last rebuild.
+    pub fn len(&self) -> usize {
+        self.knn_offsets.len().saturating_sub(1)
+    }
+
+    /// True when the last rebuild had no roots.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// `N_i`: the nearest roots of `i`, by distance then index (at most k).
+    pub fn neighbours_of(&self, i: u32) -> &[u32] {
+        row(&self.knn_offsets, &self.knn_indices, i)
+    }
+
+    /// The neighbourhoods as CSR: row `i` is `indices[offsets[i]..offsets[i+1]]`.
+    pub fn neighbours_csr(&self) -> (&[u32], &[u32]) {
+        (&self.knn_offsets, &self.knn_indices)
+    }
+
+    /// The symmetric pair set: `(a, b)` with `a < b` and `a ∈ N_b` or
+    /// `b ∈ N_a`, sorted.
+    pub fn pairs(&self) -> &[(u32, u32)] {
+        &self.pairs
+    }
+
+    /// Obstacle candidates of `i`: every other root `j` with
+    /// `|r_i − r_j| ≤ reach_i + reach_j`, sorted by index. The relation is
+    /// symmetric; the adjustment keeps those earlier in the order.
+    pub fn obstacle_candidates_of(&self, i: u32) -> &[u32] {
+        row(&self.obstacle_offsets, &self.obstacle_indices, i)
+    }
+
+    /// The obstacle candidates as CSR (same layout as [`neighbours_csr`](Self::neighbours_csr)).
+    pub fn obstacle_csr(&self) -> (&[u32], &[u32]) {
+        (&self.obstacle_offsets, &self.obstacle_indices)
+    }
+
+    fn rebuild_nearest(&mut self, frames: &[RootFrame], params: &NeighbourParams) {
+        self.knn_offsets.clear();
+        self.knn_indices.clear();
+        self.knn_offsets.push(0);
+        for (i, frame) in frames.iter().enumerate() {
+            let accept = |j: u32| j as usize != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+            self.tree.nearest(frame.position, params.k, &accept, &mut self.best);
+            self.knn_indices.extend(self.best.iter().map(|&(_, j)| j));
+            self.knn_offsets.push(self.knn_indices.len() as u32);
+        }
+    }
+
+    /// Symmetrises the neighbourhoods into sorted unique `(lo, hi)` pairs with
+    /// a counting sort on `lo` followed by a small sort per bucket.
+    fn rebuild_pairs(&mut self, n: usize) {
+        let (offsets, indices) = (&self.knn_offsets, &self.knn_indices);
+        let buckets = &mut self.bucket_offsets;
+        buckets.clear();
+        buckets.resize(n + 1, 0);
+        for i in 0..n as u32 {
+            for &j in row(offsets, indices, i) {
+                buckets[i.min(j) as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            buckets[i + 1] += buckets[i];
+        }
+        let cursor = &mut self.fill_cursor;
+        cursor.clear();
+        cursor.extend_from_slice(&buckets[..n]);
+        let items = &mut self.bucket_items;
+        items.clear();
+        items.resize(indices.len(), 0);
+        for i in 0..n as u32 {
+            for &j in row(offsets, indices, i) {
+                let lo = i.min(j) as usize;
+                items[cursor[lo] as usize] = i.max(j);
+                cursor[lo] += 1;
+            }
+        }
+        self.pairs.clear();
+        for lo in 0..n {
+            let bucket = &mut items[buckets[lo] as usize..buckets[lo + 1] as usize];
+            bucket.sort_unstable();
+            let mut last = None;
+            for &hi in bucket.iter() {
+                if last != Some(hi) {
+                    self.pairs.push((lo as u32, hi));
+                    last = Some(hi);
+                }
+            }
+        }
+    }
+
+    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+        self.obstacle_offsets.clear();
+        self.obstacle_indices.clear();
+        self.obstacle_offsets.push(0);
+        let max_reach = reach.iter().fold(0.0f32, |m, &r| m.max(sanitized_reach(r)));
+        for (i, frame) in frames.iter().enumerate() {
+            if !reach.is_empty() {
+                let reach_i = sanitized_reach(reach[i]);
+                let bound = reach_i + max_reach;
+                let start = self.obstacle_indices.len();
+                let indices = &mut self.obstacle_indices;
+                self.tree.within(frame.position, bound * bound, &mut |j, d2| {
+                    let limit = reach_i + sanitized_reach(reach[j as usize]);
+                    if j as usize != i
+                        && d2 <= limit * limit
+                        && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
+                    {
+                        indices.push(j);
+                    }
+                });
+                self.obstacle_indices[start..].sort_unstable();
+            }
+            self.obstacle_offsets.push(self.obstacle_indices.len() as u32);
+        }
+    }
+}
+
+/// Row `i` of a CSR structure (empty when `i` is out of range).
+fn row<'a>(offsets: &[u32], indices: &'a [u32], i: u32) -> &'a [u32] {
+    let i = i as usize;
+    if i + 1 >= offsets.len() {
+        return &[];
+    }
+    &indices[offsets[i] as usize..offsets[i + 1] as usize]
+}
+
+/// Whether two roots may be related: their normals do not disagree more
+/// than `min_dot` allows. Symmetric bitwise (the dot product commutes).
+#[inline]
+fn normals_agree(a: &RootFrame, b: &RootFrame, min_dot: f32) -> bool {
+    min_dot == f32::NEG_INFINITY || a.normal.dot(b.normal) >= min_dot
+}
+
+/// Feather reach as used by the obstacle test: negative or non-finite → 0.
+#[inline]
+fn sanitized_reach(r: f32) -> f32 {
+    if r.is_finite() && r > 0.0 { r } else { 0.0 }
+}

@@ -1,0 +1,145 @@
+//! Uniform hash grids for radius queries around sample points. Queries
+//! visit cells in a fixed order and points within a cell in insertion
+//! order, so nothing depends on hash-map iteration order.
+
+use crate::rng::mix64;
+use glam::Vec3;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+type Cell = [i32; 3];
+
+/// A cheap hasher for cell keys (SplitMix finaliser).
+#[derive(Default)]
+pub(crate) struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        mix64(self.0)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = self.0.rotate_left(8) ^ b as u64;
+        }
+    }
+    fn write_i32(&mut self, i: i32) {
+        self.0 = mix64(self.0 ^ i as u32 as u64);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.0 = mix64(self.0 ^ i as u64);
+    }
+}
+
+type CellMap<V> = HashMap<Cell, V, BuildHasherDefault<CellHasher>>;
+
+fn cell_of(p: Vec3, inv_cell: f32) -> Cell {
+    let c = (p * inv_cell).floor();
+    [c.x as i32, c.y as i32, c.z as i32]
+}
+
+/// Visits every cell overlapping the cube around `center` of half-size `radius`.
+fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cell)) {
+    let lo = cell_of(center - Vec3::splat(radius), inv_cell);
+    let hi = cell_of(center + Vec3::splat(radius), inv_cell);
+    for x in lo[0]..=hi[0] {
+        for y in lo[1]..=hi[1] {
+            for z in lo[2]..=hi[2] {
+                f([x, y, z]);
+            }
+        }
+    }
+}
+
+/// A grid over a fixed point set.
+#[derive(Clone, Debug)]
+pub(crate) struct StaticGrid {
+    inv_cell: f32,
+    ranges: CellMap<(u32, u32)>,
+    order: Vec<u32>,
+    positions: Vec<Vec3>,
+}
+
+impl StaticGrid {
+    /// Buckets `positions` into cells of size `cell`.
+    pub(crate) fn new(positions: Vec<Vec3>, cell: f32) -> Self {
+        let inv_cell = 1.0 / cell;
+        let mut keyed: Vec<(Cell, u32)> =
+            positions.iter().enumerate().map(|(i, &p)| (cell_of(p, inv_cell), i as u32)).collect();
+        keyed.sort_unstable();
+        let mut ranges = CellMap::default();
+        let mut start = 0;
+        while start < keyed.len() {
+            let mut end = start;
+            while end < keyed.len() && keyed[end].0 == keyed[start].0 {
+                end += 1;
+            }
+            ranges.insert(keyed[start].0, (start as u32, end as u32));
+            start = end;
+        }
+        let order = keyed.into_iter().map(|(_, i)| i).collect();
+        Self { inv_cell, ranges, order, positions }
+    }
+
+    /// Calls `f(index, distance²)` for every point within `radius` of `center`.
+    #[inline]
+    pub(crate) fn for_each_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
+        let r2 = radius * radius;
+        for_each_cell(center, radius, self.inv_cell, |cell| {
+            if let Some(&(a, b)) = self.ranges.get(&cell) {
+                for &i in &self.order[a as usize..b as usize] {
+                    let d2 = (self.positions[i as usize] - center).length_squared();
+                    if d2 <= r2 {
+                        f(i, d2);
+                    }
+                }
+            }
+        });
+    }
+}
+
+/// A grid that grows one point at a time.
+#[derive(Clone, Debug)]
+pub(crate) struct DynamicGrid {
+    inv_cell: f32,
+    cells: CellMap<Vec<u32>>,
+}
+
+impl DynamicGrid {
+    pub(crate) fn new(cell: f32) -> Self {
+        Self { inv_cell: 1.0 / cell, cells: CellMap::default() }
+    }
+
+    pub(crate) fn insert(&mut self, index: u32, position: Vec3) {
+        self.cells.entry(cell_of(position, self.inv_cell)).or_default().push(index);
+    }
+
+    /// Calls `f(index)` for every inserted point in a cell overlapping the
+    /// cube of half-size `radius` around `center` (the caller checks distance).
+    pub(crate) fn for_each_candidate(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32)) {
+        for_each_cell(center, radius, self.inv_cell, |cell| {
+            if let Some(list) = self.cells.get(&cell) {
+                list.iter().for_each(|&i| f(i));
+            }
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    #[test]
+    fn static_grid_finds_exactly_the_points_in_range() {
+        let mut rng = Rng::new(5);
+        let pts: Vec<Vec3> =
+            (0..500).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0).collect();
+        let grid = StaticGrid::new(pts.clone(), 0.3);
+        let c = Vec3::new(0.1, -0.2, 0.3);
+        let mut found = Vec::new();
+        grid.for_each_within(c, 0.7, |i, _| found.push(i));
+        found.sort_unstable();
+        let expected: Vec<u32> = (0..500).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
+        assert_eq!(found, expected);
+    }
+}

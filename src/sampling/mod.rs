@@ -1,0 +1,199 @@
+//! Planting the feather roots (DESIGN.md §2): the orientation-field-guided
+//! sampler of the paper (Algorithm 1) and the 2015 random baseline, chosen by
+//! `config.sampler`, both Poisson-disk samplers over a shared random pool.
+//!
+//! The global spacing `d` is `config.spacing` when set; otherwise it is
+//! searched for so that the root count meets `config.target_feathers`
+//! (2000 when that is 0 too): roots ∝ 1/d², so a few sampling passes with a
+//! secant step on `log n` against `log d` land within a few percent.
+//!
+//! Same mesh, fields, config and seed give the same roots bit for bit at any
+//! thread count: the pool is drawn in blocks with one random stream each,
+//! the samplers themselves are sequential, and no hash-map order reaches
+//! the output.
+
+mod grid;
+mod guided;
+pub mod metrics;
+mod pool;
+mod random;
+
+pub use metrics::{SamplingMetrics, sampling_metrics};
+
+use crate::config::{Config, SamplerKind};
+use crate::error::{Error, ErrorKind, Result};
+use crate::field::Fields;
+use crate::mesh::WeldedMesh;
+use crate::rng::Rng;
+use crate::roots::{RootBinding, edge_basis_coordinates, root_id};
+use crate::surface::Surface;
+use glam::Vec3;
+use pool::{DensityField, DiskSampler, MAX_POOL, PoolPoint};
+use std::time::Instant;
+
+/// Root count aimed at when neither a spacing nor a target is given.
+pub(crate) const DEFAULT_TARGET_FEATHERS: usize = 2000;
+
+/// Roots per `d²` of (density-weighted) area each sampler typically packs;
+/// only the first guess of the spacing search uses them.
+const GUIDED_PACKING: f64 = 0.75;
+const RANDOM_PACKING: f64 = 0.67;
+
+/// Spacing search: at most this many sampling passes, stopping early once
+/// the count is within this relative error of the target.
+const SEARCH_PASSES: usize = 6;
+const SEARCH_TOLERANCE: f64 = 0.04;
+
+/// Smallest pool drawn.
+const MIN_POOL: usize = 16;
+
+/// Stream tag of the samplers' random choices.
+const SAMPLER_STREAM: u64 = 0x7361_6D70;
+
+/// The planted roots and how they were obtained.
+#[derive(Clone, Debug)]
+pub struct Sampling {
+    /// The roots, in the order they were placed.
+    pub roots: Vec<RootBinding>,
+    /// The global spacing `d` used (local `d_i = d × spacing_scale`).
+    pub spacing: f32,
+    /// Quality figures of the result.
+    pub metrics: SamplingMetrics,
+    /// Wall time of the sampling itself (every pass of a spacing search;
+    /// not the metrics).
+    pub seconds: f64,
+}
+
+/// Plants roots on the welded rest mesh with the sampler, spacing or target
+/// count, and seed of `config` (see the module notes).
+pub fn sample_roots(mesh: &WeldedMesh, surface: &Surface, fields: &Fields, config: &Config) -> Result<Sampling> {
+    config.validate()?;
+    if surface.face_count() != mesh.triangles.len()
+        || surface.vertex_count() != mesh.positions.len()
+        || fields.vertex_spacing_scales().len() != mesh.positions.len()
+    {
+        return Err(Error::new(ErrorKind::InvalidArgument, "surface and fields must be built from this welded mesh"));
+    }
+    let start = Instant::now();
+    let positions = &mesh.positions;
+    let mut normals = Vec::new();
+    surface.vertex_normals(positions, &mut normals);
+    let density = DensityField::new(surface, fields, positions, &normals);
+    let target = if config.target_feathers > 0 { config.target_feathers } else { DEFAULT_TARGET_FEATHERS };
+    let (spacing, points, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
+        let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
+        (if config.spacing > 0.0 { config.spacing } else { nominal }, Vec::new(), Vec::new())
+    } else if config.spacing > 0.0 {
+        let (points, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing);
+        (config.spacing, points, samples)
+    } else {
+        search_spacing(&density, surface, positions, fields, config, target)
+    };
+    let roots = bind_roots(surface, positions, fields, &points, &samples, config.seed);
+    let seconds = start.elapsed().as_secs_f64();
+    let metrics = sampling_metrics(surface, positions, fields, &roots, spacing, config.theta);
+    Ok(Sampling { roots, spacing, metrics, seconds })
+}
+
+/// One run of the configured sampler at global spacing `d`: the pool and
+/// the pool indices that became roots.
+fn sampling_pass(
+    density: &DensityField<'_>,
+    surface: &Surface,
+    positions: &[Vec3],
+    fields: &Fields,
+    config: &Config,
+    d: f32,
+) -> (Vec<PoolPoint>, Vec<u32>) {
+    let expected = density.effective_area() / (d as f64 * d as f64);
+    // Pool size = pool_factor × expected root count.
+    let size = (config.pool_factor as f64 * expected).ceil();
+    let size = if size.is_finite() { (size as usize).clamp(MIN_POOL, MAX_POOL) } else { MAX_POOL };
+    let points = density.draw_pool(d, size, config.seed);
+    let cell = 2.0 * d * fields.median_spacing_scale();
+    let mut disk = DiskSampler::new(surface, positions, &points, cell);
+    let mut rng = Rng::for_stream(config.seed, SAMPLER_STREAM);
+    match config.sampler {
+        SamplerKind::Guided => guided::sample_guided(&mut disk, fields, config.theta, config.randomness, &mut rng),
+        SamplerKind::Random => random::sample_random(&mut disk),
+    }
+    let samples = disk.into_samples();
+    (points, samples)
+}
+
+/// Finds the spacing whose root count is nearest `target` (secant steps on
+/// `log n` against `log d`, slope −2 to start) and returns that pass.
+fn search_spacing(
+    density: &DensityField<'_>,
+    surface: &Surface,
+    positions: &[Vec3],
+    fields: &Fields,
+    config: &Config,
+    target: usize,
+) -> (f32, Vec<PoolPoint>, Vec<u32>) {
+    let packing = match config.sampler {
+        SamplerKind::Guided => GUIDED_PACKING,
+        SamplerKind::Random => RANDOM_PACKING,
+    };
+    let mut d = (density.effective_area() / (packing * target as f64)).sqrt() as f32;
+    let mut best: Option<(f64, f32, Vec<PoolPoint>, Vec<u32>)> = None;
+    let mut previous: Option<(f64, f64)> = None;
+    for _ in 0..SEARCH_PASSES {
+        let (points, samples) = sampling_pass(density, surface, positions, fields, config, d);
+        let n = samples.len();
+        let error = (n as f64 / target as f64 - 1.0).abs();
+        let done = error <= SEARCH_TOLERANCE;
+        let next = next_spacing(d, n, target, &mut previous);
+        if best.as_ref().is_none_or(|b| error < b.0) {
+            best = Some((error, d, points, samples));
+        }
+        if done {
+            break;
+        }
+        d = next;
+    }
+    let (_, d, points, samples) = best.expect("at least one pass ran");
+    (d, points, samples)
+}
+
+/// The secant step of the spacing search; `previous` holds the last
+/// (log d, log n) pair and is updated.
+fn next_spacing(d: f32, n: usize, target: usize, previous: &mut Option<(f64, f64)>) -> f32 {
+    if n == 0 {
+        return d * 0.5;
+    }
+    let (ld, ln) = ((d as f64).ln(), (n as f64).ln());
+    let slope = match *previous {
+        Some((pd, pn)) if (ld - pd).abs() > 1e-9 && (ln - pn).abs() > 1e-9 => ((ln - pn) / (ld - pd)).clamp(-4.0, -1.0),
+        _ => -2.0,
+    };
+    *previous = Some((ld, ln));
+    (ld + ((target as f64).ln() - ln) / slope).exp() as f32
+}
+
+/// Turns the placed pool points into root bindings.
+fn bind_roots(
+    surface: &Surface,
+    positions: &[Vec3],
+    fields: &Fields,
+    points: &[PoolPoint],
+    samples: &[u32],
+    seed: u64,
+) -> Vec<RootBinding> {
+    samples
+        .iter()
+        .map(|&j| {
+            let p = &points[j as usize];
+            let at = p.surface_point();
+            let direction = fields.direction_at(surface, at, p.normal);
+            RootBinding {
+                id: root_id(p.face, j as u64, seed),
+                point: at,
+                rest_direction: edge_basis_coordinates(surface.corners(positions, p.face as usize), direction),
+                spacing: p.spacing,
+                length_scale: fields.length_scale_at(surface, at),
+                width_scale: fields.width_scale_at(surface, at),
+            }
+        })
+        .collect()
+}

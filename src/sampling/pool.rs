@@ -1,0 +1,285 @@
+//! The sample pool of Algorithm 1 ("a large pool of uniform random samples
+//! on the surface"), and the Poisson-disk bookkeeping both samplers share.
+//!
+//! One deliberate change from the paper: the pool is drawn with density
+//! proportional to `1/d(p)²` rather than uniform in area, so every disk of
+//! radius `d` holds about the same number of pool points whatever the local
+//! spacing, and packing is equally tight in dense and sparse regions. With a
+//! uniform spacing field the two are the same.
+
+use super::grid::{DynamicGrid, StaticGrid};
+use crate::field::Fields;
+use crate::geometry::SurfacePoint;
+use crate::rng::Rng;
+use crate::surface::{NearbyPatch, Surface};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Pool points drawn per rayon task (each block has its own random stream).
+const POOL_BLOCK: usize = 4096;
+
+/// Upper bound on the pool size (memory: about 44 bytes a point).
+pub(crate) const MAX_POOL: usize = 4 << 20;
+
+/// Stream tag of the pool's random numbers.
+const POOL_STREAM: u64 = 0x706F_6F6C;
+
+/// Share of a face that is feathered, by its number of feathered corners:
+/// a point is bare where its bare corners weigh more than ½.
+const PRESENCE_FRACTION: [f64; 4] = [0.0, 0.25, 0.75, 1.0];
+
+/// One pool point at the rest pose.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PoolPoint {
+    pub(crate) position: Vec3,
+    pub(crate) normal: Vec3,
+    pub(crate) face: u32,
+    pub(crate) bary: [f32; 3],
+    /// Local Poisson-disk radius `d_j`.
+    pub(crate) spacing: f32,
+}
+
+impl PoolPoint {
+    pub(crate) fn surface_point(&self) -> SurfacePoint {
+        SurfacePoint { face: self.face, bary: self.bary }
+    }
+}
+
+/// Where pool points may fall and how densely: per-face weights for
+/// drawing points with density `∝ 1/s²` (`s` the spacing multiplier).
+pub(crate) struct DensityField<'a> {
+    surface: &'a Surface,
+    fields: &'a Fields,
+    positions: &'a [Vec3],
+    normals: &'a [Vec3],
+    /// Cumulative face weights `area × max corner 1/s²`.
+    cdf: Vec<f64>,
+    /// Per face: smallest feathered corner multiplier (0 for bare faces).
+    min_scale: Vec<f32>,
+    /// `∫ 1/s² dA` over the feathered surface: roots ≈ this / d² × packing.
+    effective_area: f64,
+}
+
+impl<'a> DensityField<'a> {
+    pub(crate) fn new(surface: &'a Surface, fields: &'a Fields, positions: &'a [Vec3], normals: &'a [Vec3]) -> Self {
+        let scales = fields.vertex_spacing_scales();
+        let mut cdf = Vec::with_capacity(surface.face_count());
+        let mut min_scale = Vec::with_capacity(surface.face_count());
+        let (mut total, mut effective_area) = (0.0f64, 0.0f64);
+        for (f, tri) in surface.triangles().iter().enumerate() {
+            let area = {
+                let [a, b, c] = surface.corners(positions, f);
+                0.5 * (b - a).cross(c - a).length() as f64
+            };
+            let feathered: Vec<f32> = tri.iter().map(|&v| scales[v as usize]).filter(|&s| s > 0.0).collect();
+            let lo = feathered.iter().copied().fold(f32::INFINITY, f32::min);
+            if feathered.is_empty() || area.is_nan() || area <= 0.0 {
+                min_scale.push(0.0);
+            } else {
+                let mean_inv2 =
+                    feathered.iter().map(|&s| 1.0 / (s as f64 * s as f64)).sum::<f64>() / feathered.len() as f64;
+                effective_area += area * PRESENCE_FRACTION[feathered.len()] * mean_inv2;
+                total += area / (lo as f64 * lo as f64);
+                min_scale.push(lo);
+            }
+            cdf.push(total);
+        }
+        Self { surface, fields, positions, normals, cdf, min_scale, effective_area }
+    }
+
+    /// `∫ 1/s² dA` over the feathered part of the surface.
+    pub(crate) fn effective_area(&self) -> f64 {
+        self.effective_area
+    }
+
+    /// Draws `count` pool points for global spacing `d`, deterministic for
+    /// `seed` whatever the thread count.
+    pub(crate) fn draw_pool(&self, d: f32, count: usize, seed: u64) -> Vec<PoolPoint> {
+        let total = self.cdf.last().copied().unwrap_or(0.0);
+        if count == 0 || total.is_nan() || total <= 0.0 {
+            return Vec::new();
+        }
+        let blocks = count.div_ceil(POOL_BLOCK);
+        let parts: Vec<Vec<PoolPoint>> = (0..blocks)
+            .into_par_iter()
+            .map(|b| {
+                let wanted = POOL_BLOCK.min(count - b * POOL_BLOCK);
+                let mut rng = Rng::for_stream(seed ^ POOL_STREAM, b as u64);
+                self.draw_block(&mut rng, d, wanted, total)
+            })
+            .collect();
+        parts.concat()
+    }
+
+    fn draw_block(&self, rng: &mut Rng, d: f32, wanted: usize, total: f64) -> Vec<PoolPoint> {
+        let mut out = Vec::with_capacity(wanted);
+        let mut attempts = 0usize;
+        while out.len() < wanted && attempts < 64 * wanted {
+            attempts += 1;
+            let u = rng.next_f64() * total;
+            let face = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+            let (mut r1, mut r2) = (rng.next_f32(), rng.next_f32());
+            if r1 + r2 > 1.0 {
+                (r1, r2) = (1.0 - r1, 1.0 - r2);
+            }
+            let accept_u = rng.next_f32();
+            let point = SurfacePoint { face: face as u32, bary: [1.0 - r1 - r2, r1, r2] };
+            let Some(scale) = self.fields.spacing_scale_at(self.surface, point) else { continue };
+            // Rejection from the face's densest corner down to density 1/s².
+            let ratio = self.min_scale[face] / scale;
+            if accept_u >= ratio * ratio {
+                continue;
+            }
+            out.push(PoolPoint {
+                position: self.surface.position(self.positions, point),
+                normal: self.surface.interpolated_normal(self.positions, self.normals, point),
+                face: face as u32,
+                bary: point.bary,
+                spacing: d * scale,
+            });
+        }
+        out
+    }
+}
+
+/// The pool points not yet removed, with O(1) removal and uniform choice.
+struct AliveSet {
+    list: Vec<u32>,
+    slot: Vec<u32>,
+}
+
+impl AliveSet {
+    const GONE: u32 = u32::MAX;
+
+    fn new(n: usize) -> Self {
+        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect() }
+    }
+
+    #[inline]
+    fn contains(&self, i: u32) -> bool {
+        self.slot[i as usize] != Self::GONE
+    }
+
+    fn remove(&mut self, i: u32) {
+        let s = self.slot[i as usize];
+        if s == Self::GONE {
+            return;
+        }
+        let last = self.list.pop().expect("non-empty when an element is alive");
+        if last != i {
+            self.list[s as usize] = last;
+            self.slot[last as usize] = s;
+        }
+        self.slot[i as usize] = Self::GONE;
+    }
+
+    fn random(&self, rng: &mut Rng) -> Option<u32> {
+        (!self.list.is_empty()).then(|| self.list[rng.below(self.list.len())])
+    }
+}
+
+/// Poisson-disk state shared by both samplers: the pool, what is left of
+/// it, and the samples placed so far. Two points conflict when
+/// `G(p_i, p_j) ≤ max(d_i, d_j)`.
+pub(crate) struct DiskSampler<'a> {
+    pub(crate) surface: &'a Surface,
+    pub(crate) positions: &'a [Vec3],
+    pub(crate) points: &'a [PoolPoint],
+    grid: StaticGrid,
+    alive: AliveSet,
+    samples: Vec<u32>,
+    sample_grid: DynamicGrid,
+    patch: NearbyPatch,
+    check_patch: NearbyPatch,
+    /// Points with a spacing above this are checked against the samples
+    /// before placement (see [`DiskSampler::conflicts`]).
+    check_above: f32,
+}
+
+impl<'a> DiskSampler<'a> {
+    /// Sets up the state; `cell` is the grid cell size (about `2d`).
+    pub(crate) fn new(surface: &'a Surface, positions: &'a [Vec3], points: &'a [PoolPoint], cell: f32) -> Self {
+        let grid = StaticGrid::new(points.iter().map(|p| p.position).collect(), cell);
+        let min_spacing = points.iter().map(|p| p.spacing).fold(f32::INFINITY, f32::min);
+        Self {
+            surface,
+            positions,
+            points,
+            grid,
+            alive: AliveSet::new(points.len()),
+            samples: Vec::new(),
+            sample_grid: DynamicGrid::new(cell),
+            patch: NearbyPatch::new(surface),
+            check_patch: NearbyPatch::new(surface),
+            check_above: 2.0 * min_spacing,
+        }
+    }
+
+    /// Pool points placed as samples, in placement order.
+    pub(crate) fn into_samples(self) -> Vec<u32> {
+        self.samples
+    }
+
+    pub(crate) fn pool_is_empty(&self) -> bool {
+        self.alive.list.is_empty()
+    }
+
+    pub(crate) fn is_alive(&self, j: u32) -> bool {
+        self.alive.contains(j)
+    }
+
+    /// A uniformly chosen pool point still in the pool.
+    pub(crate) fn random_alive(&self, rng: &mut Rng) -> Option<u32> {
+        self.alive.random(rng)
+    }
+
+    pub(crate) fn discard(&mut self, j: u32) {
+        self.alive.remove(j);
+    }
+
+    /// Makes pool point `j` a sample: removes from the pool every point
+    /// within `G ≤ max(d_i, d_j)` (the paper's `N_i` and the pruning of
+    /// `C_i`) and returns in `candidates` the remaining points with
+    /// `d_i < G ≤ 2 d_i` (the paper's `C_i`).
+    pub(crate) fn place(&mut self, j: u32, candidates: &mut Vec<u32>) {
+        candidates.clear();
+        let p = self.points[j as usize];
+        self.alive.remove(j);
+        self.samples.push(j);
+        self.sample_grid.insert(j, p.position);
+        let reach = 2.0 * p.spacing;
+        self.patch.gather(self.surface, self.positions, p.face, p.position, p.normal, reach);
+        let (patch, alive, points) = (&self.patch, &mut self.alive, self.points);
+        self.grid.for_each_within(p.position, reach, |k, _| {
+            if !alive.contains(k) {
+                return;
+            }
+            let q = &points[k as usize];
+            let g = patch.geodesic_to(q.position, q.normal, q.face);
+            if g <= p.spacing.max(q.spacing) {
+                alive.remove(k);
+            } else if g <= reach {
+                candidates.push(k);
+            }
+        });
+    }
+
+    /// Whether pool point `j` lies within its own `d_j` of a sample. Only
+    /// possible where the spacing more than doubles within `d_j` (a sample
+    /// `i` prunes the pool out to `2 d_i` only), so only such points are
+    /// checked.
+    pub(crate) fn conflicts(&mut self, j: u32) -> bool {
+        let q = self.points[j as usize];
+        if q.spacing <= self.check_above {
+            return false;
+        }
+        self.check_patch.gather(self.surface, self.positions, q.face, q.position, q.normal, q.spacing);
+        let mut conflict = false;
+        let (patch, points) = (&self.check_patch, self.points);
+        self.sample_grid.for_each_candidate(q.position, q.spacing, |s| {
+            let p = &points[s as usize];
+            conflict |= patch.geodesic_to(p.position, p.normal, p.face) <= q.spacing;
+        });
+        conflict
+    }
+}

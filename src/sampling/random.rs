@@ -1,0 +1,22 @@
+//! The 2015 baseline: area-weighted dart throwing at the same density. Pool
+//! points are independent random draws, so taking them in pool order and
+//! keeping each one that does not conflict with an earlier keeper is dart
+//! throwing with rejection (random sequential adsorption), maximal with
+//! respect to the pool.
+
+use super::pool::DiskSampler;
+
+/// Throws every pool point in turn; keepers become samples.
+pub(crate) fn sample_random(disk: &mut DiskSampler<'_>) {
+    let mut scratch = Vec::new();
+    for j in 0..disk.points.len() as u32 {
+        if !disk.is_alive(j) {
+            continue;
+        }
+        if disk.conflicts(j) {
+            disk.discard(j);
+            continue;
+        }
+        disk.place(j, &mut scratch);
+    }
+}
