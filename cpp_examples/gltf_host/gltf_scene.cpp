@@ -137,6 +137,12 @@ Mat4 read_matrix(const std::vector<double>& m) {
     return r;
 }
 
+void store(const Vec3& q, size_t v, std::vector<float>& xyz) {
+    xyz[3 * v] = static_cast<float>(q.x);
+    xyz[3 * v + 1] = static_cast<float>(q.y);
+    xyz[3 * v + 2] = static_cast<float>(q.z);
+}
+
 void require_finite(const std::vector<double>& values, const std::string& what) {
     for (double v : values) {
         if (!std::isfinite(v)) throw InputError(what + ": non-finite value");
@@ -349,60 +355,71 @@ std::optional<ClipInfo> GltfScene::clip() const {
 
 void GltfScene::pose_at(double seconds, std::vector<float>& xyz) const { evaluate(clip_ ? &*clip_ : nullptr, seconds, xyz); }
 
-void GltfScene::evaluate(const Clip* clip, double seconds, std::vector<float>& xyz) const {
-    std::vector<NodeTransform> local = nodes_;
-    std::vector<double> weights = base_weights_;
-    if (clip != nullptr) {
-        double v[4];
-        for (const Channel& c : clip->channels) {
-            const Sampler& s = clip->samplers[c.sampler];
-            NodeTransform& t = local[static_cast<size_t>(c.node)];
-            switch (c.path) {
-            case TargetPath::Translation: s.sample(seconds, false, v), t.translation = {v[0], v[1], v[2]}; break;
-            case TargetPath::Rotation: s.sample(seconds, true, v), t.rotation = {v[0], v[1], v[2], v[3]}; break;
-            case TargetPath::Scale: s.sample(seconds, false, v), t.scale = {v[0], v[1], v[2]}; break;
-            case TargetPath::Weights:
-                if (c.node == instance_node_) s.sample(seconds, false, weights.data());
-                break;
-            }
+void GltfScene::apply_clip(const Clip& clip, double seconds, std::vector<NodeTransform>& local, std::vector<double>& weights) const {
+    double v[4];
+    for (const Channel& c : clip.channels) {
+        const Sampler& s = clip.samplers[c.sampler];
+        NodeTransform& t = local[static_cast<size_t>(c.node)];
+        switch (c.path) {
+        case TargetPath::Translation: s.sample(seconds, false, v), t.translation = {v[0], v[1], v[2]}; break;
+        case TargetPath::Rotation: s.sample(seconds, true, v), t.rotation = {v[0], v[1], v[2], v[3]}; break;
+        case TargetPath::Scale: s.sample(seconds, false, v), t.scale = {v[0], v[1], v[2]}; break;
+        case TargetPath::Weights:
+            if (c.node == instance_node_) s.sample(seconds, false, weights.data());  // width checked in select_clip
+            break;
         }
     }
+}
+
+std::vector<Mat4> GltfScene::global_transforms(const std::vector<NodeTransform>& local) const {
     std::vector<Mat4> global(local.size());
     for (size_t i : node_order_) {
         const NodeTransform& t = local[i];
         const Mat4 m = t.matrix ? *t.matrix : compose_trs(t.translation, t.rotation, t.scale);
         global[i] = parent_[i] < 0 ? m : global[static_cast<size_t>(parent_[i])] * m;
     }
+    return global;
+}
 
-    // Morph first (in the mesh's own space), then skin or place by the node.
+std::vector<double> GltfScene::morphed_positions(const std::vector<double>& weights) const {
     std::vector<double> p = base_positions_;
     for (size_t t = 0; t < target_deltas_.size(); ++t) {
         if (weights[t] == 0) continue;
         for (size_t i = 0; i < p.size(); ++i) p[i] += weights[t] * target_deltas_[t][i];
     }
-    const size_t nv = p.size() / 3;
-    xyz.resize(nv * 3);
-    if (skinned()) {
-        // The skinned node's own transform is ignored (glTF 2.0, 3.7.3.3).
-        std::vector<Mat4> joint(joints_.size());
-        for (size_t j = 0; j < joints_.size(); ++j) joint[j] = global[static_cast<size_t>(joints_[j])] * inverse_bind_[j];
-        for (size_t v = 0; v < nv; ++v) {
-            const Vec3 rest{p[3 * v], p[3 * v + 1], p[3 * v + 2]};
-            Vec3 out = influence_begin_[v] == influence_begin_[v + 1] ? rest : Vec3{};  // no influence: left in place
-            for (size_t k = influence_begin_[v]; k < influence_begin_[v + 1]; ++k) {
-                const Vec3 q = transform_point(joint[influences_[k].joint], rest);
-                const double w = influences_[k].weight;
-                out = {out.x + w * q.x, out.y + w * q.y, out.z + w * q.z};
-            }
-            xyz[3 * v] = static_cast<float>(out.x), xyz[3 * v + 1] = static_cast<float>(out.y), xyz[3 * v + 2] = static_cast<float>(out.z);
+    return p;
+}
+
+// Linear blend skinning; the skinned node's own transform is ignored (glTF 2.0, 3.7.3.3).
+void GltfScene::skin_positions(const std::vector<Mat4>& global, const std::vector<double>& p, std::vector<float>& xyz) const {
+    std::vector<Mat4> joint(joints_.size());
+    for (size_t j = 0; j < joints_.size(); ++j) joint[j] = global[static_cast<size_t>(joints_[j])] * inverse_bind_[j];
+    for (size_t v = 0; v < p.size() / 3; ++v) {
+        const Vec3 rest{p[3 * v], p[3 * v + 1], p[3 * v + 2]};
+        Vec3 out = influence_begin_[v] == influence_begin_[v + 1] ? rest : Vec3{};  // no influence: left in place
+        for (size_t k = influence_begin_[v]; k < influence_begin_[v + 1]; ++k) {
+            const Vec3 q = transform_point(joint[influences_[k].joint], rest);
+            const double w = influences_[k].weight;
+            out = {out.x + w * q.x, out.y + w * q.y, out.z + w * q.z};
         }
+        store(out, v, xyz);
+    }
+}
+
+void GltfScene::evaluate(const Clip* clip, double seconds, std::vector<float>& xyz) const {
+    std::vector<NodeTransform> local = nodes_;
+    std::vector<double> weights = base_weights_;
+    if (clip != nullptr) apply_clip(*clip, seconds, local, weights);
+    const std::vector<Mat4> global = global_transforms(local);
+    // Morph first, in the mesh's own space; then skin, or place by the node.
+    const std::vector<double> p = morphed_positions(weights);
+    xyz.resize(p.size());
+    if (skinned()) {
+        skin_positions(global, p, xyz);
         return;
     }
     const Mat4 place = instance_node_ >= 0 ? global[static_cast<size_t>(instance_node_)] : Mat4{};
-    for (size_t v = 0; v < nv; ++v) {
-        const Vec3 q = transform_point(place, {p[3 * v], p[3 * v + 1], p[3 * v + 2]});
-        xyz[3 * v] = static_cast<float>(q.x), xyz[3 * v + 1] = static_cast<float>(q.y), xyz[3 * v + 2] = static_cast<float>(q.z);
-    }
+    for (size_t v = 0; v < p.size() / 3; ++v) store(transform_point(place, {p[3 * v], p[3 * v + 1], p[3 * v + 2]}), v, xyz);
 }
 
 }  // namespace plumage_host

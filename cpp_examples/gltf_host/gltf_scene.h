@@ -54,6 +54,10 @@ private:
     void load_skin_weights(const tinygltf::Model& model, size_t primitive, size_t vertex_offset);
     void select_clip(const tinygltf::Model& model, const std::string& request);
     void evaluate(const Clip* clip, double seconds, std::vector<float>& xyz) const;
+    void apply_clip(const Clip& clip, double seconds, std::vector<NodeTransform>& local, std::vector<double>& weights) const;
+    std::vector<Mat4> global_transforms(const std::vector<NodeTransform>& local) const;
+    std::vector<double> morphed_positions(const std::vector<double>& weights) const;
+    void skin_positions(const std::vector<Mat4>& global, const std::vector<double>& p, std::vector<float>& xyz) const;
 
     int mesh_index_ = -1;
     std::string mesh_name_;

@@ -66,8 +66,93 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
 
 bool validate_frame(ValidateWhen when, size_t k, size_t n) { return when == ValidateWhen::Every || (when == ValidateWhen::Last && k + 1 == n); }
 
+// One run of the host: the rest pose, then every frame, then the outputs.
+class Session {
+public:
+    explicit Session(const Options& opt) : opt_(opt) {
+        const Stopwatch load_clock;
+        subject_ = open_subject(opt_);
+        report_.set_timing("load_seconds", load_clock.seconds());
+        clip_ = subject_->clip();
+        times_ = frame_times(opt_, clip_);
+    }
+
+    void create_rest_pose() {
+        PlumageConfig cfg = make_config(opt_);
+        cfg.progress = &ProgressLine::library_callback;
+        cfg.progress_user_data = &progress_;
+        report_.set_subject(opt_.input.empty() ? "builtin:procedural_body" : opt_.input, subject_->mesh_name(), subject_->vertex_count(),
+                            subject_->triangle_count(), run_config(cfg, opt_, clip_, times_.size()));
+        progress_.set_context("rest pose");
+        const Stopwatch create_clock;
+        sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles());
+        report_.set_timing("create_seconds", create_clock.seconds());
+        check(plumage_system_feather_count(sys_.get(), &feather_count_), sys_.get(), "plumage_system_feather_count");
+        report_.set_feathers(feather_count_);
+        report_.set_sampling(sampling_stats(*sys_));
+        report_.set_ordering(ordering_stats(*sys_));
+        report_.set_static(frame_stats(*sys_), opt_.validate != ValidateWhen::None ? validate(*sys_) : std::nullopt);
+        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_triangles(*sys_));
+    }
+
+    void step_frames() {
+        const Stopwatch frames_clock;
+        std::vector<float> pose;
+        for (size_t k = 0; k < times_.size(); ++k) {
+            subject_->pose_at(times_[k], pose);
+            progress_.set_context("frame " + std::to_string(k + 1) + "/" + std::to_string(times_.size()));
+            const Stopwatch step_clock;
+            check(plumage_system_step(sys_.get(), pose.data(), pose.size() / 3), sys_.get(), "plumage_system_step");
+            const double step_seconds = step_clock.seconds();
+            step_total_ += step_seconds;
+            // Validation and copies happen after the clock stopped: not step time.
+            const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
+            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v);
+            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_triangles(*sys_));
+            progress_.frame_done(k + 1, times_.size(), step_seconds);
+        }
+        progress_.clear();
+        report_.set_timing("frames_seconds", frames_clock.seconds());
+    }
+
+    void finish() {
+        std::printf("plumage_gltf: %s, mesh \"%s\": %zu vertices, %zu triangles, %zu feathers\n", opt_.input.empty() ? "built-in model" : opt_.input.c_str(),
+                    subject_->mesh_name().c_str(), subject_->vertex_count(), subject_->triangle_count(), feather_count_);
+        if (!times_.empty()) {
+            std::printf("plumage_gltf: %zu frames of \"%s\" at %g fps, mean step %.3f ms\n", times_.size(), clip_ ? clip_->name.c_str() : "(no clip)",
+                        opt_.fps, step_total_ / static_cast<double>(times_.size()) * 1e3);
+        }
+        if (recorder_) {
+            const Stopwatch write_clock;
+            recorder_->write_glb(opt_.out);
+            report_.set_timing("write_seconds", write_clock.seconds());
+            std::printf("plumage_gltf: wrote %s\n", opt_.out.c_str());
+            if (recorder_->untracked_feathers() > 0) {
+                std::printf("plumage_gltf: %zu feathers absent at rest were left out of the .glb\n", recorder_->untracked_feathers());
+            }
+        }
+        if (!opt_.report.empty()) {
+            report_.set_timing("total_seconds", total_.seconds());
+            report_.write(opt_.report);
+            std::printf("plumage_gltf: wrote %s\n", opt_.report.c_str());
+        }
+    }
+
+private:
+    const Options& opt_;
+    Stopwatch total_;
+    std::unique_ptr<AnimatedMesh> subject_;
+    std::optional<ClipInfo> clip_;
+    std::vector<double> times_;
+    Report report_;
+    ProgressLine progress_;  // the library holds a pointer to it: declared before, so destroyed after, the system
+    SystemHandle sys_;
+    size_t feather_count_ = 0;
+    std::optional<AnimationRecorder> recorder_;
+    double step_total_ = 0;
+};
+
 int run(int argc, const char* const* argv) {
-    const Stopwatch total;
     const Options opt = parse_options(argc, argv);
     if (opt.help) {
         std::cout << usage_text();
@@ -78,72 +163,10 @@ int run(int argc, const char* const* argv) {
         return 0;
     }
     check_abi();
-
-    const Stopwatch load_clock;
-    const std::unique_ptr<AnimatedMesh> subject = open_subject(opt);
-    const double load_seconds = load_clock.seconds();
-    const std::optional<ClipInfo> clip = subject->clip();
-    const std::vector<double> times = frame_times(opt, clip);
-    ProgressLine progress;
-    PlumageConfig cfg = make_config(opt);
-    cfg.progress = &ProgressLine::library_callback;
-    cfg.progress_user_data = &progress;
-
-    Report report;
-    report.set_subject(opt.input.empty() ? "builtin:procedural_body" : opt.input, subject->mesh_name(), subject->vertex_count(),
-                       subject->triangle_count(), run_config(cfg, opt, clip, times.size()));
-    report.set_timing("load_seconds", load_seconds);
-
-    progress.set_context("rest pose");
-    const Stopwatch create_clock;
-    const SystemHandle sys = create_system(cfg, subject->rest_positions(), subject->triangles());
-    report.set_timing("create_seconds", create_clock.seconds());
-    size_t feather_count = 0;
-    check(plumage_system_feather_count(sys.get(), &feather_count), sys.get(), "plumage_system_feather_count");
-    report.set_feathers(feather_count);
-    report.set_sampling(sampling_stats(*sys));
-    report.set_ordering(ordering_stats(*sys));
-    report.set_static(frame_stats(*sys), opt.validate != ValidateWhen::None ? validate(*sys) : std::nullopt);
-
-    std::optional<AnimationRecorder> recorder;
-    if (!opt.out.empty()) recorder.emplace(subject->rest_positions(), subject->triangles(), feathers(*sys), feather_triangles(*sys));
-
-    const Stopwatch frames_clock;
-    std::vector<float> pose;
-    double step_total = 0;
-    for (size_t k = 0; k < times.size(); ++k) {
-        subject->pose_at(times[k], pose);
-        progress.set_context("frame " + std::to_string(k + 1) + "/" + std::to_string(times.size()));
-        const Stopwatch step_clock;
-        check(plumage_system_step(sys.get(), pose.data(), pose.size() / 3), sys.get(), "plumage_system_step");
-        const double step_seconds = step_clock.seconds();
-        step_total += step_seconds;
-        const std::optional<PlumageValidation> v = validate_frame(opt.validate, k, times.size()) ? validate(*sys) : std::nullopt;
-        report.add_frame(k, times[k], step_seconds, frame_stats(*sys), v);
-        if (recorder) recorder->add_frame(times[k], pose, feathers(*sys), feather_triangles(*sys));
-        progress.frame_done(k + 1, times.size(), step_seconds);
-    }
-    progress.clear();
-    report.set_timing("frames_seconds", frames_clock.seconds());
-
-    std::printf("plumage_gltf: %s, mesh \"%s\": %zu vertices, %zu triangles, %zu feathers\n", opt.input.empty() ? "built-in model" : opt.input.c_str(),
-                subject->mesh_name().c_str(), subject->vertex_count(), subject->triangle_count(), feather_count);
-    if (!times.empty()) {
-        std::printf("plumage_gltf: %zu frames of \"%s\" at %g fps, mean step %.3f ms\n", times.size(), clip ? clip->name.c_str() : "(no clip)", opt.fps,
-                    step_total / static_cast<double>(times.size()) * 1e3);
-    }
-    if (recorder) {
-        const Stopwatch write_clock;
-        recorder->write_glb(opt.out);
-        report.set_timing("write_seconds", write_clock.seconds());
-        std::printf("plumage_gltf: wrote %s\n", opt.out.c_str());
-        if (recorder->untracked_feathers() > 0) std::printf("plumage_gltf: %zu feathers absent at rest were left out of the .glb\n", recorder->untracked_feathers());
-    }
-    if (!opt.report.empty()) {
-        report.set_timing("total_seconds", total.seconds());
-        report.write(opt.report);
-        std::printf("plumage_gltf: wrote %s\n", opt.report.c_str());
-    }
+    Session session(opt);
+    session.create_rest_pose();
+    session.step_frames();
+    session.finish();
     return 0;
 }
 
