@@ -49,11 +49,13 @@ bool looks_like_json(const std::vector<unsigned char>& bytes) {
 
 bool is_supported_required_extension(const std::string& name) {
     // KHR_mesh_quantization only widens accessor types, which the accessor
-    // reader handles. The texture extensions affect pixels the host never reads.
-    static const char* const kSupported[] = {"KHR_mesh_quantization", "KHR_texture_transform", "KHR_texture_basisu",
-                                             "EXT_texture_webp"};
-    for (const char* s : kSupported) {
-        if (name == s) return true;
+    // reader handles. Material, texture and light extensions change nothing
+    // the host reads (it never reads materials or pixels). Anything else may
+    // change geometry or animation (Draco, meshopt, animation pointers,
+    // instancing): refused rather than misread.
+    if (name == "KHR_mesh_quantization" || name == "KHR_lights_punctual") return true;
+    for (const char* prefix : {"KHR_materials_", "KHR_texture_", "EXT_texture_"}) {
+        if (name.rfind(prefix, 0) == 0) return true;
     }
     return false;
 }

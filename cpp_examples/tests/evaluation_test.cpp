@@ -415,6 +415,10 @@ void refusals() {
     f.single_node_scene(triangle_mesh(f));
     f.doc()["extensionsRequired"] = {"KHR_draco_mesh_compression"};
     EXPECT_THROW(InputError, open(f, "draco.glb"), "KHR_draco_mesh_compression");
+    f.doc()["extensionsRequired"] = {"EXT_meshopt_compression"};
+    EXPECT_THROW(InputError, open(f, "meshopt.glb"), "EXT_meshopt_compression");
+    f.doc()["extensionsRequired"] = {"KHR_materials_pbrSpecularGlossiness", "KHR_texture_transform"};  // nothing the host reads
+    CHECK(open(f, "materials.glb").vertex_count() == 3);
 
     GltfFixture past;
     const int pos = past.floats({0, 0, 0, 1, 0, 0, 0, 1, 0}, "VEC3");
