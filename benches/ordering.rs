@@ -2,6 +2,8 @@
 //! ellipsoid, feathers flowing from head (+x) to tail.
 //!
 //! * `neighbourhoods/10k`: k-nearest neighbourhoods and the pair set.
+//! * `neighbourhoods_and_obstacles/10k`: the same plus obstacle candidates
+//!   for feathers three root spacings long.
 //! * `static_order/10k`: priorities of every pair and the static order.
 //! * `frame_reorder/10k_2pct`: one frame of incremental reordering when a
 //!   local patch of 2 % of the roots deforms (`R_k`, alternating between two
@@ -69,6 +71,18 @@ fn benches(c: &mut Criterion) {
     nb.rebuild(&frames, &[], &params);
 
     c.bench_function("neighbourhoods/10k", |b| b.iter(|| nb.rebuild(black_box(&frames), &[], &params)));
+
+    // Feathers three root spacings long (the body's area is about 21.5).
+    let reach = vec![3.0 * (21.5 / ROOTS as f32).sqrt(); ROOTS];
+    let mut with_obstacles = Neighbourhoods::new();
+    c.bench_function("neighbourhoods_and_obstacles/10k", |b| {
+        b.iter(|| with_obstacles.rebuild(black_box(&frames), &reach, &params))
+    });
+    eprintln!(
+        "obstacle candidates: {} (mean {:.1} per root)",
+        with_obstacles.obstacle_csr().1.len(),
+        with_obstacles.obstacle_csr().1.len() as f64 / ROOTS as f64
+    );
 
     let mut deltas = Vec::new();
     let mut order = PriorityOrder::new();
