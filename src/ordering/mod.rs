@@ -19,6 +19,11 @@
 //!    `retry_suppressed`);
 //! 4. readjust `R_k ∪` [`PriorityOrder::became_prior`] in [`PriorityOrder::order`].
 //!
+//! The first frame (and every frame of the `rebuild` mode) instead calls
+//! [`Neighbourhoods::rebuild`], [`Priorities::deltas_of_pairs`] and
+//! [`PriorityOrder::build_static`]. The `legacy` mode builds the static order
+//! once with [`Priorities::legacy`] (Eq. 2) and never updates it.
+//!
 //! Nothing here uses threads: every result is the same on any pool.
 
 mod dynamic_order;
