@@ -267,6 +267,32 @@ impl<'a> DiskSampler<'a> {
         self.alive.random(rng)
     }
 
+    /// The placed sample nearest to `position` within `radius` whose
+    /// normal faces the same way as `normal`.
+    pub(crate) fn nearest_sample(&self, position: Vec3, normal: Vec3, radius: f32) -> Option<u32> {
+        let mut best: Option<(f32, u32)> = None;
+        self.sample_grid.for_each_candidate(position, radius, |s| {
+            let p = &self.points[s as usize];
+            let d2 = (p.position - position).length_squared();
+            if d2 <= radius * radius && p.normal.dot(normal) > 0.0 && best.is_none_or(|b| d2 < b.0) {
+                best = Some((d2, s));
+            }
+        });
+        best.map(|b| b.1)
+    }
+
+    /// The pool point still in the pool nearest to `position` within
+    /// `radius`, and its distance.
+    pub(crate) fn nearest_alive(&self, position: Vec3, radius: f32) -> Option<(f32, u32)> {
+        let mut best: Option<(f32, u32)> = None;
+        self.grid.for_each_slot_within(position, radius, |k, d2| {
+            if self.alive.contains(k) && best.is_none_or(|b| d2 < b.0) {
+                best = Some((d2, k));
+            }
+        });
+        best.map(|(d2, k)| (d2.sqrt(), k))
+    }
+
     pub(crate) fn discard(&mut self, j: u32) {
         self.alive.remove(j);
     }
