@@ -7,6 +7,10 @@
 //! (2000 when that is 0 too): roots ∝ 1/d², so a few sampling passes with a
 //! secant step on `log n` against `log d` land within a few percent.
 //!
+//! The pool holds `config.pool_factor` × the expected root count, taken as
+//! `∫ dA / d(p)²` (one root per `d²`; the guided sampler's lattice packs
+//! about 0.6–0.75 and dart throwing about 0.65 roots per `d²`).
+//!
 //! Same mesh, fields, config and seed give the same roots bit for bit at any
 //! thread count: the pool is drawn in blocks with one random stream each,
 //! the samplers themselves are sequential, and no hash-map order reaches
