@@ -8,8 +8,10 @@
 //! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
 //! `extern "C"` function, nothing else).
 
+pub mod body;
 pub mod config;
 pub mod error;
+pub mod feather;
 pub mod ffi;
 pub mod geometry;
 pub mod mesh;
