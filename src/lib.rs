@@ -8,6 +8,7 @@
 //! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
 //! `extern "C"` function, nothing else).
 
+pub mod adjustment;
 pub mod body;
 pub mod config;
 pub mod error;
