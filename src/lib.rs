@@ -18,6 +18,7 @@ pub mod geometry;
 pub mod mesh;
 pub mod rng;
 pub mod system;
+pub mod validation;
 
 pub use config::{Config, Mode, SamplerKind};
 pub use error::{Error, ErrorKind, Result};
