@@ -141,8 +141,12 @@ fn clip_triangle(t: &[Vec3; 3], side: impl Fn(Vec3) -> f32, out: &mut Vec<[Vec3;
     }
 }
 
-/// Feathers whose triangles cross the body (exact test) more than 5 % of
-/// their length from the root, measured along the posed shaft. Sorted.
+/// Feathers that penetrate the body more than 5 % of their length from the
+/// root (measured along the posed shaft): their triangles there cross a
+/// body triangle (exact test), or, crossing none, have a corner under the
+/// skin (a feather drooping or rolling into the body from its root crosses
+/// the skin only in the tolerated part, or touches it along the shaft; a
+/// part of it is then inside). Sorted.
 pub fn body_penetrations(
     frames: &[RootFrame],
     shapes: &[FeatherShape],
@@ -157,13 +161,50 @@ pub fn body_penetrations(
                 return false;
             };
             body.triangles_in_box(&bounds, ids);
-            ids.iter().any(|&t| {
+            let crosses = ids.iter().any(|&t| {
                 let tri = body.corners(t);
                 part.iter().any(|p| triangles_intersect(p, &tri))
-            })
+            });
+            // Without a crossing each triangle lies on one side of the skin
+            // (the two vanes may lie on different sides, meeting it along
+            // the shaft): its first corner clearly off the skin tells which.
+            crosses
+                || part.iter().any(|t| {
+                    t.iter().find_map(|&p| side_of_skin(body, p, shapes[i].length, ids)).is_some_and(|under| under)
+                })
         })
         .collect();
     hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
+}
+
+/// Which side of the body surface `p` is on: `Some(true)` under it,
+/// `Some(false)` above it, `None` on it (within the contact tolerance) or
+/// with no skin within `reach`. The side is judged from the nearest skin
+/// point by the normals of every face at the nearest distance, summed, so
+/// that edges and corners of the skin judge by all their faces. The search
+/// starts small and widens, since feather corners are usually near skin.
+fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -> Option<bool> {
+    let mut radius = reach / 64.0;
+    let nearest = loop {
+        if let Some(n) = body.closest_point(p, radius, scratch) {
+            break n;
+        }
+        if radius >= reach {
+            return None;
+        }
+        radius = (radius * 4.0).min(reach);
+    };
+    let tolerance = 1e-6 * reach.max(p.abs().max_element());
+    if nearest.distance <= tolerance {
+        return None;
+    }
+    let tie = nearest.distance * (1.0 + 1e-4) + tolerance;
+    let normal: Vec3 = scratch
+        .iter()
+        .filter(|&&t| (crate::body::closest_point_on_triangle(p, body.corners(t)) - p).length() <= tie)
+        .map(|&t| body.normal(t))
+        .sum();
+    Some((p - nearest.point).dot(normal) < 0.0)
 }
 
 /// Fraction of `probes` random surface points (area-weighted, placed with
