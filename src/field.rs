@@ -275,6 +275,20 @@ mod tests {
     }
 
     #[test]
+    fn host_hints_are_projected_and_missing_ones_filled() {
+        let mesh = plate();
+        let s = Surface::new(&mesh);
+        // Vertex 2's hint is zero: it takes its neighbours' direction.
+        let hints = [0.0, 1.0, 3.0, 0.0, 2.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0];
+        let f = Fields::new(&mesh, &s, Some(&hints), None, None, None, &Config::default()).unwrap();
+        for d in f.vertex_directions() {
+            assert!((*d - Vec3::Y).length() < 1e-5, "{d:?}");
+        }
+        let at = f.direction_at(&s, SurfacePoint { face: 0, bary: [0.2, 0.3, 0.5] }, Vec3::Z);
+        assert!((at - Vec3::Y).length() < 1e-5);
+    }
+
+    #[test]
     fn bare_corners_do_not_shrink_the_spacing() {
         let mesh = plate();
         let s = Surface::new(&mesh);

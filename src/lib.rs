@@ -8,9 +8,12 @@
 //! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
 //! `extern "C"` function, nothing else).
 
+pub mod adjustment;
 pub mod animation;
+pub mod body;
 pub mod config;
 pub mod error;
+pub mod feather;
 pub mod ffi;
 pub mod field;
 pub mod geometry;
@@ -25,6 +28,7 @@ pub mod snapshot;
 pub mod stats;
 pub mod surface;
 pub mod system;
+pub mod validation;
 
 pub use config::{Config, Mode, SamplerKind};
 pub use error::{Error, ErrorKind, Result};

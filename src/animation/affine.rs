@@ -19,7 +19,7 @@ pub struct FaceMap {
 
 impl FaceMap {
     /// The identity map.
-    pub const IDENTITY: Self = Self { linear: Mat3::IDENTITY, translation: Vec3::ZERO };
+    pub(crate) const IDENTITY: Self = Self { linear: Mat3::IDENTITY, translation: Vec3::ZERO };
 
     /// Applies the map to a point.
     #[inline]

@@ -30,10 +30,12 @@
 //! cycle (a path `q ⇝ p` plus the new edge); if the new edge is the weakest
 //! on it, the insertion is refused (and, for a reversal, the old edge is
 //! restored); otherwise the weakest edge is deleted and the search repeats,
-//! since a second path may still close another cycle. A refusal undoes the
-//! deletions made on the way, so every operation is all-or-nothing. It
-//! follows that an insertion is refused exactly when some path `q ⇝ p` made
-//! only of stronger edges exists.
+//! since a second path may still close another cycle. The paper assumes a
+//! single cycle; with several, we refuse when the new edge is the weakest on
+//! *any* of them, i.e. exactly when a path `q ⇝ p` made only of stronger
+//! edges exists, and decide that before deleting anything, so every
+//! operation is all-or-nothing. Cycles are searched breadth-first: the
+//! shortest, most local cycle is the one whose weakest edge goes.
 //!
 //! # Suppressed pairs
 //! A pair whose wanted edge (the sign of its latest `ΔP`) is not in the graph
@@ -44,6 +46,7 @@
 //! repeat until none succeeds, so afterwards every suppressed pair is blocked
 //! by a path of stronger edges.
 
+use super::priority::Priorities;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::ops::AddAssign;
@@ -195,13 +198,13 @@ pub struct PriorityOrder {
     rank_pool: Vec<u32>,
     cycle: Vec<u32>,
     cycle_pairs: Vec<u32>,
-    op_deleted: Vec<(u32, Edge)>,
     // Per-frame reports.
     became_prior: Vec<u32>,
     gained_prior: Vec<u32>,
     moved: Vec<u32>,
     // Update and rebuild scratch.
     changed: Vec<(u32, u32, f32, u32)>,
+    frame_changed: Vec<(u32, u32, f32)>,
     retry: Vec<u32>,
     next_pairs: Vec<(u32, u32)>,
     next_delta: Vec<f32>,
@@ -335,24 +338,34 @@ impl PriorityOrder {
         self.moved.clear();
     }
 
-    /// One frame of reordering (DESIGN §5 step 3): [`begin_frame`](Self::begin_frame);
-    /// if `pairs` is given, [`sync_pairs`](Self::sync_pairs) with it (new
-    /// pairs take `ΔP` from `new_pair_delta`); then
-    /// [`update_pairs`](Self::update_pairs) with `changed`; then
-    /// [`retry_suppressed`](Self::retry_suppressed). Returns the summed stats.
+    /// One frame of reordering (DESIGN §5 step 3, paper §3.3):
+    /// [`begin_frame`](Self::begin_frame); if `pairs` is given (neighbourhoods
+    /// recomputed at the current pose), [`sync_pairs`](Self::sync_pairs) with
+    /// it, new pairs taking their `ΔP` from `priorities`; then recompute `ΔP`
+    /// of every pair touching a root of `roots` (`R_k`) and
+    /// [`update_pairs`](Self::update_pairs) with them; finally
+    /// [`retry_suppressed`](Self::retry_suppressed). Returns the summed stats
+    /// (`seconds` covers the whole call, `ΔP` recomputation included);
+    /// afterwards [`became_prior`](Self::became_prior) lists the roots to add
+    /// to `R_k` for readjustment (`R*_k`).
     pub fn update_frame(
         &mut self,
         pairs: Option<&[(u32, u32)]>,
-        changed: &[(u32, u32, f32)],
-        new_pair_delta: impl FnMut(u32, u32) -> f32,
+        roots: &[u32],
+        priorities: &Priorities<'_>,
     ) -> ReorderStats {
+        let start = Instant::now();
         self.begin_frame();
         let mut stats = ReorderStats::default();
         if let Some(pairs) = pairs {
-            stats += self.sync_pairs(pairs, new_pair_delta);
+            stats += self.sync_pairs(pairs, |a, b| priorities.delta(a, b));
         }
-        stats += self.update_pairs(changed);
+        let mut changed = std::mem::take(&mut self.frame_changed);
+        priorities.changed_pairs_of_roots(self, roots, &mut changed);
+        stats += self.update_pairs(&changed);
+        self.frame_changed = changed;
         stats += self.retry_suppressed();
+        stats.seconds = start.elapsed().as_secs_f64();
         stats
     }
 
@@ -580,20 +593,26 @@ impl PriorityOrder {
 
     /// PK forward search: marks the roots reachable from `start` along
     /// prior → dependent edges that rank below `upper`, collecting them in
-    /// `forward` with parent links. Returns true (and stops) as soon as
-    /// `target` is reached: a cycle.
-    fn search_dependants(&mut self, start: u32, target: u32, upper: u32) -> bool {
+    /// `forward` with parent links. With `stronger_than`, only edges
+    /// stronger than that pair's are followed. Returns true (and stops) as
+    /// soon as `target` is reached: a cycle. The search is breadth-first, so
+    /// the cycle found is a shortest one: local, as the cycle rule intends (a
+    /// long detour would make it delete some far, unrelated weak edge).
+    fn search_dependants(&mut self, start: u32, target: u32, upper: u32, stronger_than: Option<u32>) -> bool {
         let s = self.next_stamp();
         self.forward.clear();
-        self.stack.clear();
         self.mark[start as usize] = s;
         self.forward.push(start);
-        self.stack.push(start);
-        while let Some(v) = self.stack.pop() {
+        let mut head = 0;
+        while head < self.forward.len() {
+            let v = self.forward[head];
+            head += 1;
             let (from, to) = (self.inc_offsets[v as usize] as usize, self.inc_offsets[v as usize + 1] as usize);
             for k in from..to {
                 let Incidence { other: w, pair } = self.inc[k];
-                if !is_prior_side(v, w, self.state[pair as usize]) {
+                if !is_prior_side(v, w, self.state[pair as usize])
+                    || stronger_than.is_some_and(|than| !self.stronger(pair, than))
+                {
                     continue;
                 }
                 if w == target {
@@ -604,7 +623,6 @@ impl PriorityOrder {
                     self.mark[w as usize] = s;
                     self.parent[w as usize] = (v, pair);
                     self.forward.push(w);
-                    self.stack.push(w);
                 }
             }
         }
@@ -697,29 +715,32 @@ impl PriorityOrder {
     /// Inserts the wanted edge of pair `pid` (currently absent) with the
     /// cycle rule (module notes). Returns the number of weaker edges deleted
     /// to break cycles, or `None` when the insertion was refused (the graph
-    /// is then exactly as before).
+    /// is then unchanged).
+    ///
+    /// On the first cycle found, a second search restricted to edges stronger
+    /// than the new one decides at once whether some cycle has the new edge
+    /// as its weakest (refusal, with that path recorded as the blocker).
+    /// Otherwise every cycle has a weaker edge, so the loop deletes the
+    /// weakest edge of each shortest cycle until none is left: it cannot end
+    /// in a refusal and never needs to undo a deletion.
     pub(super) fn insert_with_cycle_rule(&mut self, pid: u32) -> Option<usize> {
-        let (prior, dependent) = self.edge_endpoints(pid, Edge::wanted(self.delta[pid as usize]))?;
+        let wanted = Edge::wanted(self.delta[pid as usize]);
+        let (prior, dependent) = self.edge_endpoints(pid, wanted)?;
         debug_assert_eq!(self.state[pid as usize], Edge::Absent);
-        self.op_deleted.clear();
+        let mut deleted = 0;
         loop {
             let (upper, lower) = (self.rank[prior as usize], self.rank[dependent as usize]);
             if upper < lower {
                 break;
             }
-            if !self.search_dependants(dependent, prior, upper) {
+            if !self.search_dependants(dependent, prior, upper, None) {
                 self.search_priors(prior, lower);
                 self.reorder_affected();
                 break;
             }
             self.trace_cycle(dependent, prior);
-            let w = self.weakest_on_path();
-            let weakest = self.cycle_pairs[w];
-            if self.stronger(weakest, pid) {
-                // The new edge is the weakest on the cycle: refuse, undo.
-                while let Some((e, edge)) = self.op_deleted.pop() {
-                    self.set_edge(e, edge);
-                }
+            if deleted == 0 && self.search_dependants(dependent, prior, upper, Some(pid)) {
+                self.trace_cycle(dependent, prior);
                 let cycle = std::mem::take(&mut self.cycle);
                 self.record_blocking_path(pid, &cycle, &[]);
                 self.cycle = cycle;
@@ -727,18 +748,18 @@ impl PriorityOrder {
             }
             // Delete the weakest edge; what is left of the cycle (through the
             // new edge) is the path that now blocks it.
-            self.op_deleted.push((weakest, self.state[weakest as usize]));
+            let w = self.weakest_on_path();
+            let weakest = self.cycle_pairs[w];
+            debug_assert!(self.stronger(pid, weakest));
             self.set_edge(weakest, Edge::Absent);
+            self.touched.push(weakest);
+            deleted += 1;
             let cycle = std::mem::take(&mut self.cycle);
             self.record_blocking_path(weakest, &cycle[w + 1..], &cycle[..=w]);
             self.cycle = cycle;
         }
-        self.set_edge(pid, Edge::wanted(self.delta[pid as usize]));
-        for k in 0..self.op_deleted.len() {
-            let e = self.op_deleted[k].0;
-            self.touched.push(e);
-        }
-        Some(self.op_deleted.len())
+        self.set_edge(pid, wanted);
+        Some(deleted)
     }
 
     /// Brings pair `pid`'s edge to what its `ΔP` wants: nothing to do,
@@ -933,6 +954,14 @@ pub(super) fn check_pairs(pairs: &[(u32, u32)], n: usize) {
 mod tests {
     use super::*;
 
+    /// One frame with explicit new `ΔP` values.
+    fn frame(order: &mut PriorityOrder, changed: &[(u32, u32, f32)]) -> ReorderStats {
+        order.begin_frame();
+        let mut stats = order.update_pairs(changed);
+        stats += order.retry_suppressed();
+        stats
+    }
+
     /// Pairs of a triangle 0, 1, 2 with `ΔP` chosen per pair.
     fn triangle(d01: f32, d02: f32, d12: f32) -> PriorityOrder {
         let mut order = PriorityOrder::new();
@@ -958,7 +987,7 @@ mod tests {
         let mut order = PriorityOrder::new();
         order.build_static(3, &[(0, 1), (0, 2), (1, 2)], &[-3.0, 1.0, -2.0]);
         // ΔP_01 turns positive: 1 becomes prior to 0.
-        let stats = order.update_frame(None, &[(1, 0, -3.0)], |_, _| 0.0);
+        let stats = frame(&mut order, &[(1, 0, -3.0)]);
         assert_eq!((stats.priority_changes, stats.reversals_done, stats.reversals_refused), (1, 1, 0));
         // The pair (0, 2) wanting 2 before 0 no longer closes a cycle.
         assert_eq!(stats.retries_succeeded, 1);
@@ -974,7 +1003,7 @@ mod tests {
         assert_eq!(order.edge_count(), 2);
         // Pair (0, 2) now wants 2 before 0 with |ΔP| 2: cycle 2→0→1→2 whose
         // weakest edge is 1→2 (|ΔP| 1).
-        let stats = order.update_frame(None, &[(0, 2, 2.0)], |_, _| 0.0);
+        let stats = frame(&mut order, &[(0, 2, 2.0)]);
         assert_eq!((stats.edges_inserted, stats.cycles_broken), (1, 1));
         assert_eq!(order.prior_in_pair(0, 2), Some(2));
         assert_eq!(order.prior_in_pair(1, 2), None);
@@ -990,13 +1019,13 @@ mod tests {
         let mut order = triangle(-3.0, -1.0, -2.0);
         assert_eq!(order.order(), &[0, 1, 2]);
         // (0, 2) wants to turn (2 before 0) but is weaker than 0→1→2.
-        let stats = order.update_frame(None, &[(0, 2, 1.0)], |_, _| 0.0);
+        let stats = frame(&mut order, &[(0, 2, 1.0)]);
         assert_eq!((stats.priority_changes, stats.reversals_refused, stats.reversals_done), (1, 1, 0));
         assert_eq!(order.prior_in_pair(0, 2), Some(0));
         assert_eq!(order.suppressed_pairs().collect::<Vec<_>>(), vec![(0, 2)]);
         assert!(order.became_prior().is_empty());
         // Weakening 1→2 below it lets the reversal through on the next frame.
-        let stats = order.update_frame(None, &[(1, 2, -0.5)], |_, _| 0.0);
+        let stats = frame(&mut order, &[(1, 2, -0.5)]);
         assert_eq!((stats.retried, stats.reversals_done, stats.cycles_broken), (1, 1, 1));
         assert_eq!(order.prior_in_pair(0, 2), Some(2));
         assert_eq!(order.prior_in_pair(1, 2), None);

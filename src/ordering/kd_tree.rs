@@ -17,7 +17,7 @@
 use glam::Vec3;
 
 /// Largest range scanned linearly instead of split.
-const LEAF_SIZE: usize = 8;
+const LEAF_SIZE: usize = 16;
 
 /// One stored root: its position and index.
 #[derive(Clone, Copy, Debug)]
@@ -43,67 +43,80 @@ impl KdTree {
         split_range(&mut self.items, &mut self.splits);
     }
 
-    /// Appends to `best` the (at most `k`) accepted roots nearest to `query`,
-    /// sorted by distance then index, as `(squared distance, id)`. `best`
-    /// is cleared first.
+    /// Writes to `best` the (at most `k`) accepted roots nearest to `query`,
+    /// sorted by distance then index, as `(squared distance, id)`.
     pub(crate) fn nearest(&self, query: Vec3, k: usize, accept: &impl Fn(u32) -> bool, best: &mut Vec<(f32, u32)>) {
         best.clear();
         if k == 0 {
             return;
         }
-        self.nearest_in(0, self.items.len(), query, k, accept, best);
+        // Squared distance of the k-th candidate once there are k of them.
+        let mut bound = f32::INFINITY;
+        self.visit_cells(query, bound, |items| {
+            for item in items {
+                let d2 = (item.position - query).length_squared();
+                if d2 <= bound && ranks_among_best(best, k, d2, item.id) && accept(item.id) {
+                    insert_candidate(best, k, d2, item.id);
+                    if best.len() == k {
+                        bound = best[k - 1].0;
+                    }
+                }
+            }
+            bound
+        });
     }
 
     /// Calls `visit(id, squared distance)` for every root within
     /// `sqrt(radius_sq)` of `query` (boundary included), in tree order.
     pub(crate) fn within(&self, query: Vec3, radius_sq: f32, visit: &mut impl FnMut(u32, f32)) {
-        self.within_in(0, self.items.len(), query, radius_sq, visit);
-    }
-
-    fn nearest_in(
-        &self,
-        lo: usize,
-        hi: usize,
-        query: Vec3,
-        k: usize,
-        accept: &impl Fn(u32) -> bool,
-        best: &mut Vec<(f32, u32)>,
-    ) {
-        if hi - lo <= LEAF_SIZE {
-            for item in &self.items[lo..hi] {
-                if accept(item.id) {
-                    offer_candidate(best, k, (item.position - query).length_squared(), item.id);
-                }
-            }
-            return;
-        }
-        let m = lo + (hi - lo) / 2;
-        let (axis, split) = self.splits[m];
-        let gap = query[axis as usize] - split;
-        let (near, far) = if gap < 0.0 { ((lo, m), (m, hi)) } else { ((m, hi), (lo, m)) };
-        self.nearest_in(near.0, near.1, query, k, accept, best);
-        if best.len() < k || gap * gap <= best[best.len() - 1].0 {
-            self.nearest_in(far.0, far.1, query, k, accept, best);
-        }
-    }
-
-    fn within_in(&self, lo: usize, hi: usize, query: Vec3, radius_sq: f32, visit: &mut impl FnMut(u32, f32)) {
-        if hi - lo <= LEAF_SIZE {
-            for item in &self.items[lo..hi] {
+        self.visit_cells(query, radius_sq, |items| {
+            for item in items {
                 let d2 = (item.position - query).length_squared();
                 if d2 <= radius_sq {
                     visit(item.id, d2);
                 }
             }
+            radius_sq
+        });
+    }
+
+    /// Depth-first walk over the leaves, nearest side first, skipping every
+    /// cell whose lower bound on the squared distance exceeds the current
+    /// bound (`bound` at first, then whatever `leaf` returns).
+    ///
+    /// The bound is `|off|²` where `off` holds, per axis, the gap between the
+    /// query and the nearest splitting plane bounding the cell (0 when the
+    /// query lies between them), as in Arya and Mount's incremental distance.
+    /// It is evaluated in the same operation order as a point's
+    /// `length_squared`, and rounding is monotone, so no point within the
+    /// bound is ever skipped: queries stay exact, ties included.
+    fn visit_cells<'s>(&'s self, query: Vec3, mut bound: f32, mut leaf: impl FnMut(&'s [Item]) -> f32) {
+        if self.items.is_empty() {
             return;
         }
-        let m = lo + (hi - lo) / 2;
-        let (axis, split) = self.splits[m];
-        let gap = query[axis as usize] - split;
-        let (near, far) = if gap < 0.0 { ((lo, m), (m, hi)) } else { ((m, hi), (lo, m)) };
-        self.within_in(near.0, near.1, query, radius_sq, visit);
-        if gap * gap <= radius_sq {
-            self.within_in(far.0, far.1, query, radius_sq, visit);
+        // Pending far children: at most one per tree level, and a balanced
+        // tree over u32 ids has fewer than 40 levels.
+        let mut pending = [(0u32, 0u32, Vec3::ZERO); 40];
+        let mut depth = 1;
+        pending[0] = (0, self.items.len() as u32, Vec3::ZERO);
+        while depth > 0 {
+            depth -= 1;
+            let (mut lo, mut hi, off) = pending[depth];
+            if off.length_squared() > bound {
+                continue;
+            }
+            while (hi - lo) as usize > LEAF_SIZE {
+                let m = lo + (hi - lo) / 2;
+                let (axis, split) = self.splits[m as usize];
+                let gap = query[axis as usize] - split;
+                let (near, far) = if gap < 0.0 { ((lo, m), (m, hi)) } else { ((m, hi), (lo, m)) };
+                let mut far_off = off;
+                far_off[axis as usize] = gap.abs();
+                pending[depth] = (far.0, far.1, far_off);
+                depth += 1;
+                (lo, hi) = near;
+            }
+            bound = leaf(&self.items[lo as usize..hi as usize]);
         }
     }
 }
@@ -139,22 +152,31 @@ fn widest_axis(items: &[Item]) -> usize {
     }
 }
 
-/// Inserts `(d2, id)` into the sorted list `best` of at most `k` entries if
-/// it ranks among the `k` smallest by (distance, id).
+/// Whether `(d2, id)` would enter the sorted list `best` of at most `k`
+/// entries, ordered by (distance, id).
 #[inline]
-fn offer_candidate(best: &mut Vec<(f32, u32)>, k: usize, d2: f32, id: u32) {
-    let ranks_before = |e: &(f32, u32)| d2.total_cmp(&e.0).then(id.cmp(&e.1)).is_lt();
+fn ranks_among_best(best: &[(f32, u32)], k: usize, d2: f32, id: u32) -> bool {
+    best.len() < k || precedes((d2, id), best[best.len() - 1])
+}
+
+/// Inserts `(d2, id)` (which ranks) into `best`, dropping the worst entry
+/// when the list is full.
+#[inline]
+fn insert_candidate(best: &mut Vec<(f32, u32)>, k: usize, d2: f32, id: u32) {
     if best.len() == k {
-        if !ranks_before(&best[k - 1]) {
-            return;
-        }
         best.pop();
     }
     let mut pos = best.len();
-    while pos > 0 && ranks_before(&best[pos - 1]) {
+    while pos > 0 && precedes((d2, id), best[pos - 1]) {
         pos -= 1;
     }
     best.insert(pos, (d2, id));
+}
+
+/// The candidate order: distance, then index.
+#[inline]
+fn precedes(a: (f32, u32), b: (f32, u32)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
 }
 
 #[cfg(test)]

@@ -13,10 +13,16 @@
 //! A frame loop (incremental mode) does, per frame:
 //! 1. re-pose the roots; if neighbourhoods are recomputed,
 //!    [`Neighbourhoods::rebuild`];
-//! 2. find `R_k` and collect the changed pairs with
-//!    [`Priorities::changed_pairs_of_roots`];
-//! 3. [`PriorityOrder::update_frame`]`(Some(neighbourhoods.pairs()), &changed, |a, b| priorities.delta(a, b))`;
+//! 2. find `R_k` (roots whose neighbours deformed differently);
+//! 3. [`PriorityOrder::update_frame`]`(Some(neighbourhoods.pairs()), &r_k, &priorities)`
+//!    (or, step by step: `begin_frame`, `sync_pairs`, `update_pairs`,
+//!    `retry_suppressed`);
 //! 4. readjust `R_k ∪` [`PriorityOrder::became_prior`] in [`PriorityOrder::order`].
+//!
+//! The first frame (and every frame of the `rebuild` mode) instead calls
+//! [`Neighbourhoods::rebuild`], [`Priorities::deltas_of_pairs`] and
+//! [`PriorityOrder::build_static`]. The `legacy` mode builds the static order
+//! once with [`Priorities::legacy`] (Eq. 2) and never updates it.
 //!
 //! Nothing here uses threads: every result is the same on any pool.
 

@@ -48,6 +48,7 @@ pub struct Neighbourhoods {
     bucket_offsets: Vec<u32>,
     bucket_items: Vec<u32>,
     fill_cursor: Vec<u32>,
+    scratch_indices: Vec<u32>,
 }
 
 impl Neighbourhoods {
@@ -164,17 +165,22 @@ impl Neighbourhoods {
         }
     }
 
+    /// Obstacle candidates: one radius query per root, in tree order, into
+    /// scratch rows; then a transpose. The relation is symmetric bitwise
+    /// (distances, `reach_i + reach_j` and the normal test all commute, and
+    /// the tree query is exact), so the transpose of the scratch rows is the
+    /// same relation with every row sorted by index, without sorting.
     fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+        let n = frames.len();
         self.obstacle_offsets.clear();
-        self.obstacle_indices.clear();
         self.obstacle_offsets.push(0);
+        self.scratch_indices.clear();
         let max_reach = reach.iter().fold(0.0f32, |m, &r| m.max(sanitized_reach(r)));
         for (i, frame) in frames.iter().enumerate() {
             if !reach.is_empty() {
                 let reach_i = sanitized_reach(reach[i]);
                 let bound = reach_i + max_reach;
-                let start = self.obstacle_indices.len();
-                let indices = &mut self.obstacle_indices;
+                let indices = &mut self.scratch_indices;
                 self.tree.within(frame.position, bound * bound, &mut |j, d2| {
                     let limit = reach_i + sanitized_reach(reach[j as usize]);
                     if j as usize != i
@@ -184,9 +190,19 @@ impl Neighbourhoods {
                         indices.push(j);
                     }
                 });
-                self.obstacle_indices[start..].sort_unstable();
             }
-            self.obstacle_offsets.push(self.obstacle_indices.len() as u32);
+            self.obstacle_offsets.push(self.scratch_indices.len() as u32);
+        }
+        self.fill_cursor.clear();
+        self.fill_cursor.extend_from_slice(&self.obstacle_offsets[..n]);
+        self.obstacle_indices.clear();
+        self.obstacle_indices.resize(self.scratch_indices.len(), 0);
+        for i in 0..n as u32 {
+            for &j in row(&self.obstacle_offsets, &self.scratch_indices, i) {
+                let slot = &mut self.fill_cursor[j as usize];
+                self.obstacle_indices[*slot as usize] = i;
+                *slot += 1;
+            }
         }
     }
 }

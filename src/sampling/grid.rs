@@ -7,13 +7,33 @@ use glam::Vec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
-type Cell = [i32; 3];
+/// Integer cell coordinates. Hashing packs them into one word (21 bits an
+/// axis); equality still compares all three, so a packing collision costs
+/// time, never correctness.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Cell([i32; 3]);
 
-/// A cheap hasher for cell keys (SplitMix finaliser).
+impl Cell {
+    #[inline]
+    fn packed(&self) -> u64 {
+        let [x, y, z] = self.0.map(|c| c as u32 as u64 & 0x1F_FFFF);
+        (x << 42) | (y << 21) | z
+    }
+}
+
+impl std::hash::Hash for Cell {
+    #[inline]
+    fn hash<H: Hasher>(&self, state: &mut H) {
+        state.write_u64(self.packed());
+    }
+}
+
+/// A cheap hasher for packed cell keys (SplitMix finaliser).
 #[derive(Default)]
 pub(crate) struct CellHasher(u64);
 
 impl Hasher for CellHasher {
+    #[inline]
     fn finish(&self) -> u64 {
         mix64(self.0)
     }
@@ -22,11 +42,9 @@ impl Hasher for CellHasher {
             self.0 = self.0.rotate_left(8) ^ b as u64;
         }
     }
-    fn write_i32(&mut self, i: i32) {
-        self.0 = mix64(self.0 ^ i as u32 as u64);
-    }
-    fn write_usize(&mut self, i: usize) {
-        self.0 = mix64(self.0 ^ i as u64);
+    #[inline]
+    fn write_u64(&mut self, word: u64) {
+        self.0 ^= word;
     }
 }
 
@@ -34,38 +52,69 @@ type CellMap<V> = HashMap<Cell, V, BuildHasherDefault<CellHasher>>;
 
 fn cell_of(p: Vec3, inv_cell: f32) -> Cell {
     let c = (p * inv_cell).floor();
-    [c.x as i32, c.y as i32, c.z as i32]
+    Cell([c.x as i32, c.y as i32, c.z as i32])
 }
 
-/// Visits every cell overlapping the cube around `center` of half-size `radius`.
+/// Visits every cell that meets the ball of `radius` around `center`.
 fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cell)) {
     let lo = cell_of(center - Vec3::splat(radius), inv_cell);
     let hi = cell_of(center + Vec3::splat(radius), inv_cell);
+    let cell = 1.0 / inv_cell;
+    let r2 = radius * radius;
+    // Squared distance from `c` to the cell interval `[k, k + 1) · cell` on one axis.
+    let gap = |c: f32, k: i32| {
+        let (a, b) = (k as f32 * cell, (k + 1) as f32 * cell);
+        let g = (a - c).max(c - b).max(0.0);
+        g * g
+    };
+    let (lo, hi) = (lo.0, hi.0);
     for x in lo[0]..=hi[0] {
+        let gx = gap(center.x, x);
         for y in lo[1]..=hi[1] {
+            let gxy = gx + gap(center.y, y);
+            if gxy > r2 {
+                continue;
+            }
             for z in lo[2]..=hi[2] {
-                f([x, y, z]);
+                if gxy + gap(center.z, z) <= r2 {
+                    f(Cell([x, y, z]));
+                }
             }
         }
     }
 }
 
-/// A grid over a fixed point set.
+/// A grid over a fixed point set, stored sorted by cell.
 #[derive(Clone, Debug)]
 pub(crate) struct StaticGrid {
+    origin: Vec3,
     inv_cell: f32,
     ranges: CellMap<(u32, u32)>,
+    /// Sorted slot → the caller's index.
     order: Vec<u32>,
+    /// Positions in slot order.
     positions: Vec<Vec3>,
 }
 
+/// Cells a side that the packed key tells apart.
+const PACKED_CELLS: f32 = (1u32 << 21) as f32;
+
 impl StaticGrid {
-    /// Buckets `positions` into cells of size `cell`.
-    pub(crate) fn new(positions: Vec<Vec3>, cell: f32) -> Self {
+    /// Buckets `positions` into cells of size `cell` (enlarged if the points
+    /// span more cells than a packed key holds). Points keep their relative
+    /// order within a cell.
+    pub(crate) fn new(positions: &[Vec3], cell: f32) -> Self {
+        let (lo, hi) =
+            positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let origin = if lo.is_finite() { lo } else { Vec3::ZERO };
+        let extent = if hi.is_finite() { (hi - origin).max_element() } else { 0.0 };
+        let cell = cell.max(extent / (PACKED_CELLS - 2.0));
         let inv_cell = 1.0 / cell;
-        let mut keyed: Vec<(Cell, u32)> =
-            positions.iter().enumerate().map(|(i, &p)| (cell_of(p, inv_cell), i as u32)).collect();
-        keyed.sort_unstable();
+        // Within the bounding box the packed key is unique per cell, so a
+        // stable sort on it alone groups cells and keeps index order inside.
+        let mut keyed: Vec<(u64, u32)> =
+            positions.iter().enumerate().map(|(i, &p)| (cell_of(p - origin, inv_cell).packed(), i as u32)).collect();
+        keyed.sort_by_key(|&(key, _)| key);
         let mut ranges = CellMap::default();
         let mut start = 0;
         while start < keyed.len() {
@@ -73,27 +122,42 @@ impl StaticGrid {
             while end < keyed.len() && keyed[end].0 == keyed[start].0 {
                 end += 1;
             }
-            ranges.insert(keyed[start].0, (start as u32, end as u32));
+            let cell = cell_of(positions[keyed[start].1 as usize] - origin, inv_cell);
+            ranges.insert(cell, (start as u32, end as u32));
             start = end;
         }
-        let order = keyed.into_iter().map(|(_, i)| i).collect();
-        Self { inv_cell, ranges, order, positions }
+        let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
+        let positions = order.iter().map(|&i| positions[i as usize]).collect();
+        Self { origin, inv_cell, ranges, order, positions }
     }
 
-    /// Calls `f(index, distance²)` for every point within `radius` of `center`.
+    /// Sorted slot → the caller's index of the point stored there.
+    pub(crate) fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// Calls `f(slot, distance²)` for every point within `radius` of
+    /// `center`, by sorted slot.
     #[inline]
-    pub(crate) fn for_each_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
+    pub(crate) fn for_each_slot_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
         let r2 = radius * radius;
-        for_each_cell(center, radius, self.inv_cell, |cell| {
+        for_each_cell(center - self.origin, radius, self.inv_cell, |cell| {
             if let Some(&(a, b)) = self.ranges.get(&cell) {
-                for &i in &self.order[a as usize..b as usize] {
-                    let d2 = (self.positions[i as usize] - center).length_squared();
+                for (slot, p) in (a..b).zip(&self.positions[a as usize..b as usize]) {
+                    let d2 = (*p - center).length_squared();
                     if d2 <= r2 {
-                        f(i, d2);
+                        f(slot, d2);
                     }
                 }
             }
         });
+    }
+
+    /// Calls `f(index, distance²)` for every point within `radius` of
+    /// `center`, by the caller's index.
+    #[inline]
+    pub(crate) fn for_each_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
+        self.for_each_slot_within(center, radius, |slot, d2| f(self.order[slot as usize], d2));
     }
 }
 
@@ -134,7 +198,7 @@ mod tests {
         let mut rng = Rng::new(5);
         let pts: Vec<Vec3> =
             (0..500).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0).collect();
-        let grid = StaticGrid::new(pts.clone(), 0.3);
+        let grid = StaticGrid::new(&pts, 0.3);
         let c = Vec3::new(0.1, -0.2, 0.3);
         let mut found = Vec::new();
         grid.for_each_within(c, 0.7, |i, _| found.push(i));

@@ -28,32 +28,78 @@ const OPEN_TARGET: f32 = 0.3;
 /// Lattice sites are this many `d_i` apart.
 const LATTICE_STRIDE: f32 = 1.15;
 
+/// A restart joins the lattice of a placed sample within this many `d`.
+const RESTART_REACH: f32 = 3.0;
+
 /// Runs Algorithm 1 over the pool held by `disk`.
 pub(crate) fn sample_guided(disk: &mut DiskSampler<'_>, fields: &Fields, theta: f32, randomness: f32, rng: &mut Rng) {
     let mut candidates = Vec::new();
+    // Per pool slot: the lattice site a placed sample stands for.
+    let mut anchors: Vec<Option<SurfacePoint>> = vec![None; disk.points.len()];
     let Some(mut current) = disk.random_alive(rng) else { return };
-    // The lattice position `current` was snapped from; `None` after a jump.
+    // The lattice site `current` was snapped from; `None` after a jump.
     let mut anchor: Option<SurfacePoint> = None;
     loop {
         if disk.conflicts(current) {
             disk.discard(current);
-            match disk.random_alive(rng) {
-                Some(next) => {
-                    (current, anchor) = (next, None);
+            match restart(disk, fields, &anchors, theta, rng) {
+                Some(step) => {
+                    (current, anchor) = step;
                     continue;
                 }
                 None => break,
             }
         }
         disk.place(current, &mut candidates);
+        anchors[current as usize] = Some(anchor.unwrap_or_else(|| disk.points[current as usize].surface_point()));
         if disk.pool_is_empty() {
             break;
         }
         (current, anchor) = match next_sample(disk, fields, current, anchor, &candidates, theta, randomness, rng) {
             Some(step) => step,
-            None => (disk.random_alive(rng).expect("the pool is not empty"), None),
+            None => restart(disk, fields, &anchors, theta, rng).expect("the pool is not empty"),
         };
     }
+}
+
+/// Where to go on when `C_i` is empty: a random pool point (the paper's
+/// `Random(1, |P|)`), moved onto the lattice of the nearest placed sample
+/// when one of that sample's lattice sites near it is open, so that
+/// regions reached again later keep the phase of their neighbours.
+fn restart(
+    disk: &DiskSampler<'_>,
+    fields: &Fields,
+    anchors: &[Option<SurfacePoint>],
+    theta: f32,
+    rng: &mut Rng,
+) -> Option<(u32, Option<SurfacePoint>)> {
+    let r = disk.random_alive(rng)?;
+    let q = disk.points[r as usize];
+    let Some(s) = disk.nearest_sample(q.position, q.normal, RESTART_REACH * q.spacing) else {
+        return Some((r, None));
+    };
+    let p = disk.points[s as usize];
+    let o = fields.direction_at(disk.surface, p.surface_point(), p.normal);
+    let lattice = Lattice {
+        disk,
+        candidates: &[],
+        from: anchors[s as usize].unwrap_or_else(|| p.surface_point()),
+        o,
+        b: p.normal.cross(o),
+        angle: theta,
+        stride: LATTICE_STRIDE * p.spacing,
+    };
+    let open = OPEN_TARGET * p.spacing;
+    let mut best: Option<(f32, u32, SurfacePoint)> = None;
+    for turns in [&[0u32][..], &[1], &[2], &[3], &[0, 1], &[1, 2], &[2, 3], &[3, 0]] {
+        let (site, at) = lattice.walk_to(turns);
+        let Some((_, k)) = disk.nearest_alive(site, open) else { continue };
+        let from_r = (site - q.position).length();
+        if best.is_none_or(|b| from_r < b.0) {
+            best = Some((from_r, k, at));
+        }
+    }
+    Some(best.map_or((r, None), |(_, k, at)| (k, Some(at))))
 }
 
 /// The next sample among the candidates `C_i` and the lattice position it
@@ -153,15 +199,21 @@ fn nearer(a: Site, b: Site) -> Site {
 impl Lattice<'_, '_> {
     /// The site reached by walking one stride per entry of `quarter_turns`,
     /// each along `Rotate(õ, angle + k·90°)` (counterclockwise about the
-    /// normal; `b = n × õ`).
-    fn site(&self, quarter_turns: &[u32]) -> Site {
+    /// normal; `b = n × õ`): its position and surface point.
+    fn walk_to(&self, quarter_turns: &[u32]) -> (Vec3, SurfacePoint) {
         let surface = self.disk.surface;
         let mut at = self.from;
         for &k in quarter_turns {
             let (sin, cos) = (self.angle + k as f32 * FRAC_PI_2).sin_cos();
             at = surface.walk(self.disk.positions, at, self.o * cos + self.b * sin, self.stride).point;
         }
-        let target = surface.position(self.disk.positions, at);
+        (surface.position(self.disk.positions, at), at)
+    }
+
+    /// The site reached by `quarter_turns` (see [`Lattice::walk_to`]) and
+    /// the candidate nearest to it.
+    fn site(&self, quarter_turns: &[u32]) -> Site {
+        let (target, at) = self.walk_to(quarter_turns);
         let (distance, candidate) = nearest_candidate(self.disk, self.candidates, target);
         Site { point: at, candidate, distance }
     }

@@ -7,6 +7,10 @@
 //! (2000 when that is 0 too): roots ∝ 1/d², so a few sampling passes with a
 //! secant step on `log n` against `log d` land within a few percent.
 //!
+//! The pool holds `config.pool_factor` × the expected root count, taken as
+//! `∫ dA / d(p)²` (one root per `d²`; the guided sampler's lattice packs
+//! about 0.6–0.75 and dart throwing about 0.65 roots per `d²`).
+//!
 //! Same mesh, fields, config and seed give the same roots bit for bit at any
 //! thread count: the pool is drawn in blocks with one random stream each,
 //! the samplers themselves are sequential, and no hash-map order reaches
@@ -28,7 +32,7 @@ use crate::rng::Rng;
 use crate::roots::{RootBinding, edge_basis_coordinates, root_id};
 use crate::surface::Surface;
 use glam::Vec3;
-use pool::{DensityField, DiskSampler, MAX_POOL, PoolPoint};
+use pool::{DensityField, DiskSampler, MAX_POOL, SortedPool};
 use std::time::Instant;
 
 /// Root count aimed at when neither a spacing nor a target is given.
@@ -80,16 +84,19 @@ pub fn sample_roots(mesh: &WeldedMesh, surface: &Surface, fields: &Fields, confi
     surface.vertex_normals(positions, &mut normals);
     let density = DensityField::new(surface, fields, positions, &normals);
     let target = if config.target_feathers > 0 { config.target_feathers } else { DEFAULT_TARGET_FEATHERS };
-    let (spacing, points, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
+    let (spacing, pool, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
-        (if config.spacing > 0.0 { config.spacing } else { nominal }, Vec::new(), Vec::new())
+        (if config.spacing > 0.0 { config.spacing } else { nominal }, None, Vec::new())
     } else if config.spacing > 0.0 {
-        let (points, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing);
-        (config.spacing, points, samples)
+        let (pool, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing);
+        (config.spacing, Some(pool), samples)
     } else {
         search_spacing(&density, surface, positions, fields, config, target)
     };
-    let roots = bind_roots(surface, positions, fields, &points, &samples, config.seed);
+    let roots = match &pool {
+        Some(pool) => bind_roots(surface, positions, fields, pool, &samples, config.seed),
+        None => Vec::new(),
+    };
     let seconds = start.elapsed().as_secs_f64();
     let metrics = sampling_metrics(surface, positions, fields, &roots, spacing, config.theta);
     Ok(Sampling { roots, spacing, metrics, seconds })
@@ -104,21 +111,23 @@ fn sampling_pass(
     fields: &Fields,
     config: &Config,
     d: f32,
-) -> (Vec<PoolPoint>, Vec<u32>) {
+) -> (SortedPool, Vec<u32>) {
     let expected = density.effective_area() / (d as f64 * d as f64);
     // Pool size = pool_factor × expected root count.
     let size = (config.pool_factor as f64 * expected).ceil();
     let size = if size.is_finite() { (size as usize).clamp(MIN_POOL, MAX_POOL) } else { MAX_POOL };
-    let points = density.draw_pool(d, size, config.seed);
-    let cell = 2.0 * d * fields.median_spacing_scale();
-    let mut disk = DiskSampler::new(surface, positions, &points, cell);
+    let drawn = density.draw_pool(d, size, config.seed);
+    // Cells of about d: a query of radius 2d then reads little beyond the ball.
+    let cell = d * fields.median_spacing_scale();
+    let pool = SortedPool::new(drawn, cell);
+    let mut disk = DiskSampler::new(surface, positions, &pool, cell);
     let mut rng = Rng::for_stream(config.seed, SAMPLER_STREAM);
     match config.sampler {
         SamplerKind::Guided => guided::sample_guided(&mut disk, fields, config.theta, config.randomness, &mut rng),
-        SamplerKind::Random => random::sample_random(&mut disk),
+        SamplerKind::Random => random::sample_random(&mut disk, &pool.slots_in_draw_order()),
     }
     let samples = disk.into_samples();
-    (points, samples)
+    (pool, samples)
 }
 
 /// Finds the spacing whose root count is nearest `target` (secant steps on
@@ -130,30 +139,30 @@ fn search_spacing(
     fields: &Fields,
     config: &Config,
     target: usize,
-) -> (f32, Vec<PoolPoint>, Vec<u32>) {
+) -> (f32, Option<SortedPool>, Vec<u32>) {
     let packing = match config.sampler {
         SamplerKind::Guided => GUIDED_PACKING,
         SamplerKind::Random => RANDOM_PACKING,
     };
     let mut d = (density.effective_area() / (packing * target as f64)).sqrt() as f32;
-    let mut best: Option<(f64, f32, Vec<PoolPoint>, Vec<u32>)> = None;
+    let mut best: Option<(f64, f32, SortedPool, Vec<u32>)> = None;
     let mut previous: Option<(f64, f64)> = None;
     for _ in 0..SEARCH_PASSES {
-        let (points, samples) = sampling_pass(density, surface, positions, fields, config, d);
+        let (pool, samples) = sampling_pass(density, surface, positions, fields, config, d);
         let n = samples.len();
         let error = (n as f64 / target as f64 - 1.0).abs();
         let done = error <= SEARCH_TOLERANCE;
         let next = next_spacing(d, n, target, &mut previous);
         if best.as_ref().is_none_or(|b| error < b.0) {
-            best = Some((error, d, points, samples));
+            best = Some((error, d, pool, samples));
         }
         if done {
             break;
         }
         d = next;
     }
-    let (_, d, points, samples) = best.expect("at least one pass ran");
-    (d, points, samples)
+    let (_, d, pool, samples) = best.expect("at least one pass ran");
+    (d, Some(pool), samples)
 }
 
 /// The secant step of the spacing search; `previous` holds the last
@@ -176,18 +185,18 @@ fn bind_roots(
     surface: &Surface,
     positions: &[Vec3],
     fields: &Fields,
-    points: &[PoolPoint],
+    pool: &SortedPool,
     samples: &[u32],
     seed: u64,
 ) -> Vec<RootBinding> {
     samples
         .iter()
-        .map(|&j| {
-            let p = &points[j as usize];
+        .map(|&slot| {
+            let p = &pool.points[slot as usize];
             let at = p.surface_point();
             let direction = fields.direction_at(surface, at, p.normal);
             RootBinding {
-                id: root_id(p.face, j as u64, seed),
+                id: root_id(p.face, pool.draw_index(slot) as u64, seed),
                 point: at,
                 rest_direction: edge_basis_coordinates(surface.corners(positions, p.face as usize), direction),
                 spacing: p.spacing,

@@ -178,14 +178,49 @@ impl AliveSet {
     }
 }
 
+/// The pool stored in grid order, so that a radius query reads contiguous
+/// memory. Slots are positions in that order; draw indices are positions
+/// in the order the points were drawn (random, hence the random sampler's
+/// throwing order, and the root ids).
+pub(crate) struct SortedPool {
+    pub(crate) points: Vec<PoolPoint>,
+    draw_index: Vec<u32>,
+    grid: StaticGrid,
+}
+
+impl SortedPool {
+    /// Sorts `drawn` into a grid of cell size `cell`.
+    pub(crate) fn new(drawn: Vec<PoolPoint>, cell: f32) -> Self {
+        let positions: Vec<Vec3> = drawn.iter().map(|p| p.position).collect();
+        let grid = StaticGrid::new(&positions, cell);
+        let draw_index = grid.order().to_vec();
+        let points = draw_index.iter().map(|&i| drawn[i as usize]).collect();
+        Self { points, draw_index, grid }
+    }
+
+    /// The draw index of the point in `slot`.
+    pub(crate) fn draw_index(&self, slot: u32) -> u32 {
+        self.draw_index[slot as usize]
+    }
+
+    /// Slots in the order their points were drawn.
+    pub(crate) fn slots_in_draw_order(&self) -> Vec<u32> {
+        let mut slots = vec![0u32; self.draw_index.len()];
+        for (slot, &draw) in self.draw_index.iter().enumerate() {
+            slots[draw as usize] = slot as u32;
+        }
+        slots
+    }
+}
+
 /// Poisson-disk state shared by both samplers: the pool, what is left of
-/// it, and the samples placed so far. Two points conflict when
-/// `G(p_i, p_j) ≤ max(d_i, d_j)`.
+/// it, and the samples placed so far (all by slot). Two points conflict
+/// when `G(p_i, p_j) ≤ max(d_i, d_j)`.
 pub(crate) struct DiskSampler<'a> {
     pub(crate) surface: &'a Surface,
     pub(crate) positions: &'a [Vec3],
     pub(crate) points: &'a [PoolPoint],
-    grid: StaticGrid,
+    grid: &'a StaticGrid,
     alive: AliveSet,
     samples: Vec<u32>,
     sample_grid: DynamicGrid,
@@ -197,16 +232,15 @@ pub(crate) struct DiskSampler<'a> {
 }
 
 impl<'a> DiskSampler<'a> {
-    /// Sets up the state; `cell` is the grid cell size (about `2d`).
-    pub(crate) fn new(surface: &'a Surface, positions: &'a [Vec3], points: &'a [PoolPoint], cell: f32) -> Self {
-        let grid = StaticGrid::new(points.iter().map(|p| p.position).collect(), cell);
-        let min_spacing = points.iter().map(|p| p.spacing).fold(f32::INFINITY, f32::min);
+    /// Sets up the state over `pool`; `cell` is the sample grid's cell size.
+    pub(crate) fn new(surface: &'a Surface, positions: &'a [Vec3], pool: &'a SortedPool, cell: f32) -> Self {
+        let min_spacing = pool.points.iter().map(|p| p.spacing).fold(f32::INFINITY, f32::min);
         Self {
             surface,
             positions,
-            points,
-            grid,
-            alive: AliveSet::new(points.len()),
+            points: &pool.points,
+            grid: &pool.grid,
+            alive: AliveSet::new(pool.points.len()),
             samples: Vec::new(),
             sample_grid: DynamicGrid::new(cell),
             patch: NearbyPatch::new(surface),
@@ -233,6 +267,32 @@ impl<'a> DiskSampler<'a> {
         self.alive.random(rng)
     }
 
+    /// The placed sample nearest to `position` within `radius` whose
+    /// normal faces the same way as `normal`.
+    pub(crate) fn nearest_sample(&self, position: Vec3, normal: Vec3, radius: f32) -> Option<u32> {
+        let mut best: Option<(f32, u32)> = None;
+        self.sample_grid.for_each_candidate(position, radius, |s| {
+            let p = &self.points[s as usize];
+            let d2 = (p.position - position).length_squared();
+            if d2 <= radius * radius && p.normal.dot(normal) > 0.0 && best.is_none_or(|b| d2 < b.0) {
+                best = Some((d2, s));
+            }
+        });
+        best.map(|b| b.1)
+    }
+
+    /// The pool point still in the pool nearest to `position` within
+    /// `radius`, and its distance.
+    pub(crate) fn nearest_alive(&self, position: Vec3, radius: f32) -> Option<(f32, u32)> {
+        let mut best: Option<(f32, u32)> = None;
+        self.grid.for_each_slot_within(position, radius, |k, d2| {
+            if self.alive.contains(k) && best.is_none_or(|b| d2 < b.0) {
+                best = Some((d2, k));
+            }
+        });
+        best.map(|(d2, k)| (d2.sqrt(), k))
+    }
+
     pub(crate) fn discard(&mut self, j: u32) {
         self.alive.remove(j);
     }
@@ -250,7 +310,7 @@ impl<'a> DiskSampler<'a> {
         let reach = 2.0 * p.spacing;
         self.patch.gather(self.surface, self.positions, p.face, p.position, p.normal, reach);
         let (patch, alive, points) = (&self.patch, &mut self.alive, self.points);
-        self.grid.for_each_within(p.position, reach, |k, _| {
+        self.grid.for_each_slot_within(p.position, reach, |k, _| {
             if !alive.contains(k) {
                 return;
             }

@@ -6,10 +6,10 @@
 
 use super::pool::DiskSampler;
 
-/// Throws every pool point in turn; keepers become samples.
-pub(crate) fn sample_random(disk: &mut DiskSampler<'_>) {
+/// Throws every pool point in turn (`slots` in draw order); keepers become samples.
+pub(crate) fn sample_random(disk: &mut DiskSampler<'_>, slots: &[u32]) {
     let mut scratch = Vec::new();
-    for j in 0..disk.points.len() as u32 {
+    for &j in slots {
         if !disk.is_alive(j) {
             continue;
         }

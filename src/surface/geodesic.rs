@@ -1,37 +1,41 @@
 //! The approximate geodesic distance `G` of Algorithm 1, for nearby points.
 //!
-//! Algorithm 1 only ever compares `G` between points less than `2 d_i`
-//! apart, so an approximation suffices; but plain 3-D distance confuses the
-//! two skins of a thin part (a wing's upper and lower surfaces are close in
+//! Algorithm 1 only compares `G` between points less than `2 d_i` apart,
+//! so an approximation suffices; but plain 3-D distance confuses the two
+//! skins of a thin part (a wing's upper and lower surfaces are close in
 //! space and far on the surface). Our `G(p, q)` is:
 //!
-//! * the 3-D distance `|p − q|`, when `q` lies on the piece of surface that
-//!   is connected to `p` inside the ball of radius `R` around `p` (the
-//!   [`NearbyPatch`]; faces join across edges that pass through the ball),
-//!   and their normals are not opposed (`n_p · n_q ≥ −½`, i.e. within 120°);
-//! * `+∞` (far) otherwise.
+//! * `|p − q|` when the normals face the same way (`n_p · n_q > 0`): such
+//!   points compete for the same space whether or not the surface joins
+//!   them nearby (a wing lying on the body, parts that touch);
+//! * otherwise `max(|p − q|, reach(q))`, where `reach(q)` is the smallest
+//!   radius of a ball around `p` inside which the surface connects `p` to
+//!   `q` (a bottleneck distance over the faces, computed by the
+//!   [`NearbyPatch`]), and `+∞` when they are not connected within the
+//!   gathered radius. Any surface path from `p` to `q` leaves that ball, so
+//!   this is still a lower bound of the true geodesic distance.
 //!
-//! The connectivity test alone separates the skins of a closed thin plate
-//! everywhere except within `R` of its rim; the normal test separates them
-//! there too. On a curved piece narrower than `R` (a thin leg) the chord
-//! underestimates the true geodesic, which only makes such parts a little
-//! sparser than `d` asks; points more than 120° apart around it count as
-//! far, which lets both sides of a very thin limb carry a root.
+//! So the skins of a closed thin plate are as far apart as their way round
+//! the rim, while the sides of a limb thinner than `d` are as near as the
+//! chord across it (one ring of roots, not one per side).
 
 use super::Surface;
 use glam::Vec3;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
-/// Normals whose cosine is below this are opposed: their points are on
-/// different skins whatever the connectivity says.
-pub(crate) const OPPOSED_NORMAL_COS: f32 = -0.5;
+/// Normals whose cosine exceeds this face the same way.
+pub(crate) const SAME_FACING_COS: f32 = 0.0;
 
-/// The faces connected to a centre point inside a ball: the support of `G`
-/// around one point. Reusable scratch space; one per thread.
+/// The faces connected to a centre point inside a ball, each with its
+/// reach: the support of `G` around one point. Reusable scratch space; one
+/// per thread.
 #[derive(Clone, Debug)]
 pub struct NearbyPatch {
-    inside: Vec<u32>,
+    stamp: Vec<u32>,
+    reach: Vec<f32>,
     epoch: u32,
-    stack: Vec<u32>,
+    heap: BinaryHeap<Reverse<(u32, u32)>>,
     faces: Vec<u32>,
     center: Vec3,
     normal: Vec3,
@@ -42,9 +46,10 @@ impl NearbyPatch {
     /// Scratch space for `surface`.
     pub fn new(surface: &Surface) -> Self {
         Self {
-            inside: vec![0; surface.face_count()],
+            stamp: vec![0; surface.face_count()],
+            reach: vec![f32::INFINITY; surface.face_count()],
             epoch: 0,
-            stack: Vec::new(),
+            heap: BinaryHeap::new(),
             faces: Vec::new(),
             center: Vec3::ZERO,
             normal: Vec3::Z,
@@ -54,7 +59,8 @@ impl NearbyPatch {
 
     /// Collects the faces reachable from `face` (which holds `center`)
     /// through edges that pass within `radius` of `center`, at the pose
-    /// `positions`. `normal` is the unit surface normal at `center`.
+    /// `positions`, with each face's reach (the least, over paths, of the
+    /// farthest edge crossed). `normal` is the unit normal at `center`.
     pub fn gather(
         &mut self,
         surface: &Surface,
@@ -69,26 +75,30 @@ impl NearbyPatch {
         self.normal = normal;
         self.radius = radius;
         self.faces.clear();
-        self.stack.clear();
-        self.mark(face);
-        self.stack.push(face);
+        self.heap.clear();
+        self.offer(face, 0.0);
         let r2 = radius * radius;
-        while let Some(f) = self.stack.pop() {
+        // Dijkstra on the bottleneck. Reach values are >= 0, so their bit
+        // patterns order like the values; ties go to the lower face index.
+        while let Some(Reverse((bits, f))) = self.heap.pop() {
+            let reach = f32::from_bits(bits);
+            if reach > self.reach[f as usize] {
+                continue;
+            }
             for side in 0..3 {
                 let e = surface.face_edge(f as usize, side) as usize;
                 let faces = surface.faces_of_edge(e);
-                if faces.len() < 2 || faces.iter().all(|&g| self.contains_face(g)) {
+                if faces.len() < 2 {
                     continue;
                 }
                 let [a, b] = surface.edge_vertices(e).map(|v| positions[v as usize]);
-                if segment_distance_squared(center, a, b) > r2 {
+                let edge2 = segment_distance_squared(center, a, b);
+                if edge2 > r2 {
                     continue;
                 }
+                let through = reach.max(edge2.sqrt());
                 for &g in faces {
-                    if !self.contains_face(g) {
-                        self.mark(g);
-                        self.stack.push(g);
-                    }
+                    self.offer(g, through);
                 }
             }
         }
@@ -97,7 +107,15 @@ impl NearbyPatch {
     /// Whether face `f` is part of the patch.
     #[inline]
     pub fn contains_face(&self, f: u32) -> bool {
-        self.inside[f as usize] == self.epoch
+        self.stamp[f as usize] == self.epoch
+    }
+
+    /// The reach of face `f`: the smallest ball radius around the centre
+    /// within which the surface connects the centre to `f` (`+∞` outside
+    /// the patch).
+    #[inline]
+    pub fn reach(&self, f: u32) -> f32 {
+        if self.contains_face(f) { self.reach[f as usize] } else { f32::INFINITY }
     }
 
     /// The faces of the patch, in discovery order.
@@ -116,25 +134,29 @@ impl NearbyPatch {
     }
 
     /// `G(centre, q)` for a point `q` on face `q_face` with unit normal
-    /// `q_normal`: the 3-D distance when `q` is on the same skin, `+∞` when
-    /// it is not (see the module notes). Only meaningful up to the radius
-    /// the patch was gathered with.
+    /// `q_normal` (see the module notes). Meaningful up to the radius the
+    /// patch was gathered with; `+∞` means "farther than that".
     #[inline]
     pub fn geodesic_to(&self, q: Vec3, q_normal: Vec3, q_face: u32) -> f32 {
-        if !self.contains_face(q_face) || self.normal.dot(q_normal) < OPPOSED_NORMAL_COS {
-            return f32::INFINITY;
-        }
-        (q - self.center).length()
+        let chord = (q - self.center).length();
+        if self.normal.dot(q_normal) > SAME_FACING_COS { chord } else { chord.max(self.reach(q_face)) }
     }
 
-    fn mark(&mut self, f: u32) {
-        self.inside[f as usize] = self.epoch;
-        self.faces.push(f);
+    fn offer(&mut self, f: u32, reach: f32) {
+        let i = f as usize;
+        if self.stamp[i] != self.epoch {
+            self.stamp[i] = self.epoch;
+            self.faces.push(f);
+        } else if reach >= self.reach[i] {
+            return;
+        }
+        self.reach[i] = reach;
+        self.heap.push(Reverse((reach.to_bits(), f)));
     }
 
     fn next_epoch(&mut self) {
         if self.epoch == u32::MAX {
-            self.inside.iter_mut().for_each(|s| *s = 0);
+            self.stamp.iter_mut().for_each(|s| *s = 0);
             self.epoch = 0;
         }
         self.epoch += 1;
@@ -185,10 +207,14 @@ mod tests {
         assert_eq!(patch.geodesic_to(bottom, -Vec3::Z, 0), f32::INFINITY);
         let g = patch.geodesic_to(Vec3::new(2.5, 2.1, 0.05), Vec3::Z, 2);
         assert!((g - 0.5).abs() < 1e-6);
-        // With a ball reaching the rim, the rim joins the skins, but the
-        // normal test still keeps them apart.
+        // With a ball reaching the rim the skins join, but only as far as
+        // the way round the rim: at least the distance to the rim edge.
         patch.gather(&s, &pos, 3, top, Vec3::Z, 3.0);
         assert!(patch.contains_face(0) || patch.contains_face(1));
-        assert_eq!(patch.geodesic_to(bottom, -Vec3::Z, 0), f32::INFINITY);
+        let g = patch.geodesic_to(bottom, -Vec3::Z, 0);
+        assert!((g - 1.9).abs() < 0.06, "G = {g}");
+        // Facing the same way, points are as near as their chord, joined or not.
+        patch.gather(&s, &pos, 3, top, Vec3::Z, 1.0);
+        assert!((patch.geodesic_to(bottom, Vec3::Z, 0) - 0.1118).abs() < 1e-3);
     }
 }

@@ -1,0 +1,476 @@
+//! The height field of one feather: a grid in the feather's root frame over
+//! its flat footprint, holding the highest obstacle top above each cell.
+//!
+//! Layout. x (along `õ`) spans `[0, L + dx]` in `u` columns with
+//! `dx = L/(u − 1)`; y (along `b`) spans `[−W/2 − dy, W/2 + dy]` in `v` rows
+//! with `dy = W/(v − 2)`. The one-cell margin beyond the tip and the vane
+//! corners catches obstacles the posed feather reaches when cell bounds
+//! are rounded outward. Nothing lies behind the root: for any pitch below
+//! 90° the feather never covers x < 0.
+//!
+//! Two layers, because the steps treat them differently:
+//! - `obstacle`: tops of earlier feathers (their triangles raised by their
+//!   thickness along this feather's normal). The collision allowance of the
+//!   fine-pitch step lets the feather sink into these only.
+//! - `body`: the skin near the root. Only triangles facing this feather's
+//!   side count (face normal · n > −0.3): concave skin rising in front of the
+//!   root, walls and the skin under the vanes are kept; the far skin of a
+//!   thin wing or a downward overhang, which a height field cannot
+//!   represent, are left out.
+//!
+//! What is ignored. Cells start at a floor below the tangent plane (half a
+//! feather length, or deeper when the lowest pitch needs it); geometry
+//! entirely below it cannot bind any allowed pitch, so it is skipped: the
+//! other skin of a thin wing and feathers lying under the body never reach
+//! the field. The floor also bounds the free volume used by the roll step.
+//!
+//! Rasterisation is conservative: a cell takes the highest point of the
+//! triangle's plane over the whole cell (plane height at the centre plus the
+//! slope times half the cell), capped by the triangle's highest corner, in
+//! every cell the triangle might touch (edge tests against the cell's most
+//! inside corner). Nearly vertical triangles (in the feather's frame) put
+//! their highest corner in every cell of their bounding box.
+
+use crate::body::{Aabb, BodyIndex};
+use crate::feather::FeatherShape;
+use crate::geometry::RootFrame;
+use glam::{Vec2, Vec3};
+
+/// Body triangles whose unit normal has a smaller component along the
+/// feather's normal are left out (they face away: far skin, overhangs).
+const BODY_FACING_MIN: f32 = -0.3;
+/// A projected triangle is treated as a plane when its doubled area exceeds
+/// this fraction of the product of two edge lengths.
+const PLANAR_MIN_SINE: f32 = 1e-4;
+/// The floor lies at least this many feather lengths below the tangent plane.
+const FLOOR_DEPTH_PER_LENGTH: f32 = 0.5;
+/// The root socket: the first 2.5 % of the shaft, where the feather enters
+/// the skin. Nothing there is rasterised and heights just beyond it are
+/// judged at its end, so the skin around the root (which rises through
+/// rounding and normal interpolation) cannot stand the feather up.
+/// Validation tolerates body crossings within 5 % of the length.
+pub(crate) const SOCKET_FRACTION: f32 = 0.025;
+
+/// Which layer a triangle goes into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Layer {
+    Obstacle,
+    Body,
+}
+
+/// Scratch and result of one feather's rasterisation. Reused from feather
+/// to feather: after the first use at a given resolution nothing allocates.
+#[derive(Clone, Debug)]
+pub struct HeightField {
+    pub(crate) u: usize,
+    pub(crate) v: usize,
+    pub(crate) dx: f32,
+    pub(crate) dy: f32,
+    pub(crate) y_min: f32,
+    pub(crate) floor: f32,
+    /// End of the root socket along the shaft.
+    pub(crate) socket_x: f32,
+    pub(crate) shape: FeatherShape,
+    /// Obstacle tops per cell, `j·u + i` (row j across, column i along).
+    pub(crate) obstacle: Vec<f32>,
+    /// Body heights per cell.
+    pub(crate) body: Vec<f32>,
+    /// Combined height each step must clear (scratch of the steps).
+    pub(crate) need: Vec<f32>,
+    /// Column centres (x) and row centres (y).
+    pub(crate) col_x: Vec<f32>,
+    pub(crate) row_y: Vec<f32>,
+    /// Per-row shaft interval covered by the kite (scratch of the steps).
+    pub(crate) row_span: Vec<[f32; 2]>,
+    /// Per-cell pitch constraints as functions of the roll (scratch of step 2).
+    pub(crate) roll_lines: Vec<RollLine>,
+    /// Body triangle ids of the last query.
+    pub(crate) body_ids: Vec<u32>,
+}
+
+/// The pitch a covered cell demands as a function of the lateral slope `q`
+/// of the rolled feather: `p ≥ a + c·q`, with `c = c_pos` for `q ≥ 0` and
+/// `c_neg` for `q < 0` (the cell's lowest corner under the feather changes
+/// side with the sign of the roll, so each constraint is convex in `q`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct RollLine {
+    pub(crate) a: f32,
+    pub(crate) c_pos: f32,
+    pub(crate) c_neg: f32,
+}
+
+impl HeightField {
+    /// A field of `u` cells along the shaft and `v` across (at least 2 and 3).
+    pub fn new(u: usize, v: usize) -> Self {
+        let mut f = Self {
+            u: 0,
+            v: 0,
+            dx: 1.0,
+            dy: 1.0,
+            y_min: 0.0,
+            floor: -1.0,
+            socket_x: 0.0,
+            shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5 },
+            obstacle: Vec::new(),
+            body: Vec::new(),
+            need: Vec::new(),
+            col_x: Vec::new(),
+            row_y: Vec::new(),
+            row_span: Vec::new(),
+            roll_lines: Vec::new(),
+            body_ids: Vec::new(),
+        };
+        f.set_resolution(u, v);
+        f
+    }
+
+    /// Cells along the shaft.
+    pub fn columns(&self) -> usize {
+        self.u
+    }
+
+    /// Cells across the vanes.
+    pub fn rows(&self) -> usize {
+        self.v
+    }
+
+    /// Changes the resolution (allocates only when it grows).
+    pub fn set_resolution(&mut self, u: usize, v: usize) {
+        let (u, v) = (u.max(2), v.max(3));
+        if (u, v) == (self.u, self.v) {
+            return;
+        }
+        self.u = u;
+        self.v = v;
+        for layer in [&mut self.obstacle, &mut self.body, &mut self.need] {
+            layer.resize(u * v, 0.0);
+        }
+        self.col_x.resize(u, 0.0);
+        self.row_y.resize(v, 0.0);
+        self.row_span.resize(v, [0.0; 2]);
+        self.roll_lines.reserve(u * v);
+    }
+
+    /// Clears both layers to the floor and lays the grid over `shape`'s
+    /// footprint. `min_pitch` (radians, ≤ 0) deepens the floor when needed.
+    pub fn reset(&mut self, shape: &FeatherShape, min_pitch: f32) {
+        self.shape = *shape;
+        let (l, w) = (shape.length, shape.width);
+        self.dx = l / (self.u - 1) as f32;
+        self.dy = w / (self.v - 2) as f32;
+        self.y_min = -0.5 * w - self.dy;
+        let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
+        self.floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
+        self.socket_x = SOCKET_FRACTION * l;
+        self.obstacle.fill(self.floor);
+        self.body.fill(self.floor);
+        for (i, x) in self.col_x.iter_mut().enumerate() {
+            *x = (i as f32 + 0.5) * self.dx;
+        }
+        for (j, y) in self.row_y.iter_mut().enumerate() {
+            *y = self.y_min + (j as f32 + 0.5) * self.dy;
+        }
+    }
+
+    /// The floor height (cells with nothing above it hold exactly this).
+    pub fn floor(&self) -> f32 {
+        self.floor
+    }
+
+    /// Cell size along the shaft and across.
+    pub fn cell_size(&self) -> (f32, f32) {
+        (self.dx, self.dy)
+    }
+
+    /// Centre of cell (column `i`, row `j`) in local coordinates.
+    pub fn cell_centre(&self, i: usize, j: usize) -> (f32, f32) {
+        (self.col_x[i], self.row_y[j])
+    }
+
+    /// The obstacle top over cell (i, j) (the floor when none).
+    pub fn obstacle_height(&self, i: usize, j: usize) -> f32 {
+        self.obstacle[j * self.u + i]
+    }
+
+    /// The body height over cell (i, j) (the floor when none).
+    pub fn body_height(&self, i: usize, j: usize) -> f32 {
+        self.body[j * self.u + i]
+    }
+
+    /// Rasterises an obstacle feather's two world triangles, raised by its
+    /// thickness. Returns whether any cell was touched (one collision test).
+    pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]; 2], thickness: f32) -> bool {
+        let mut touched = false;
+        for tri in triangles {
+            let local = tri.map(|p| frame.to_local(p));
+            touched |= self.rasterise(Layer::Obstacle, local, thickness);
+        }
+        touched
+    }
+
+    /// Rasterises the body triangles near the feather (those facing its
+    /// side) into the body layer.
+    pub fn add_body(&mut self, frame: &RootFrame, body: &BodyIndex) {
+        let query = self.world_bounds(frame);
+        let mut ids = std::mem::take(&mut self.body_ids);
+        body.triangles_in_box(&query, &mut ids);
+        for &t in &ids {
+            if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
+                continue;
+            }
+            let local = body.corners(t).map(|p| frame.to_local(p));
+            self.rasterise(Layer::Body, local, 0.0);
+        }
+        self.body_ids = ids;
+    }
+
+    /// World bounding box of the field's volume: the footprint from the
+    /// floor up to one feather length (nothing higher can be reached).
+    fn world_bounds(&self, frame: &RootFrame) -> Aabb {
+        let x = [0.0, self.shape.length + self.dx];
+        let y = [self.y_min, -self.y_min];
+        let z = [self.floor, self.shape.length + self.dx];
+        let centre = Vec3::new(0.5 * (x[0] + x[1]), 0.0, 0.5 * (z[0] + z[1]));
+        let half = Vec3::new(0.5 * (x[1] - x[0]), 0.5 * (y[1] - y[0]), 0.5 * (z[1] - z[0]));
+        let c = frame.to_world(centre);
+        let e = frame.tangent.abs() * half.x + frame.binormal.abs() * half.y + frame.normal.abs() * half.z;
+        Aabb { min: c - e, max: c + e }
+    }
+
+    /// Rasterises one triangle given in local coordinates; its top is its
+    /// plane raised by `raise`. Returns whether any cell was touched.
+    pub(crate) fn rasterise(&mut self, layer: Layer, tri: [Vec3; 3], raise: f32) -> bool {
+        let z_top = tri[0].z.max(tri[1].z).max(tri[2].z);
+        if z_top + raise <= self.floor || z_top.is_nan() {
+            return false;
+        }
+        let (inv_dx, inv_dy) = (1.0 / self.dx, 1.0 / self.dy);
+        // Grid coordinates: cell (i, j) is the unit square [i, i+1] × [j, j+1].
+        let g = tri.map(|p| Vec2::new(p.x * inv_dx, (p.y - self.y_min) * inv_dy));
+        let (gmin, gmax) = (g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]));
+        let (u, v) = (self.u as f32, self.v as f32);
+        let socket_u = self.socket_x * inv_dx;
+        if !(gmax.x >= socket_u && gmin.x <= u && gmax.y >= 0.0 && gmin.y <= v) {
+            return false;
+        }
+        let i0 = gmin.x.floor().max(0.0) as usize;
+        let i1 = (gmax.x.floor() as usize).min(self.u - 1);
+        let j0 = gmin.y.floor().max(0.0) as usize;
+        let j1 = (gmax.y.floor() as usize).min(self.v - 1);
+
+        let plane = TrianglePlane::new(g, tri.map(|p| p.z));
+        // Columns wholly inside the root socket are skipped; the column
+        // holding the socket's end only counts beyond it.
+        let socket_col = (socket_u.floor() as usize).min(self.u - 1);
+        let socket_cut = socket_u - socket_col as f32;
+        let cells = match layer {
+            Layer::Obstacle => &mut self.obstacle,
+            Layer::Body => &mut self.body,
+        };
+        let mut touched = false;
+        for j in j0..=j1 {
+            let vc = j as f32 + 0.5;
+            let (lo, hi) = match &plane {
+                Some(p) => match p.row_span(vc, i0, i1) {
+                    Some(span) => span,
+                    None => continue,
+                },
+                None => (i0, i1),
+            };
+            let lo = lo.max(socket_col);
+            if lo > hi {
+                continue;
+            }
+            touched = true;
+            let row = &mut cells[j * self.u..(j + 1) * self.u];
+            match &plane {
+                Some(p) => {
+                    let mut start = lo;
+                    if lo == socket_col {
+                        let (uc, half) = (socket_col as f32 + 0.5 * (1.0 + socket_cut), 0.5 * (1.0 - socket_cut));
+                        let h = (p.height_at(uc, vc) + p.du.abs() * half + 0.5 * p.dv.abs()).min(z_top) + raise;
+                        row[lo] = row[lo].max(h);
+                        start = lo + 1;
+                    }
+                    let base = p.height_at(0.5, vc) + p.slack;
+                    for (i, cell) in row.iter_mut().enumerate().take(hi + 1).skip(start) {
+                        let h = (base + p.du * i as f32).min(z_top) + raise;
+                        *cell = cell.max(h);
+                    }
+                }
+                None => {
+                    for cell in &mut row[lo..=hi] {
+                        *cell = cell.max(z_top + raise);
+                    }
+                }
+            }
+        }
+        touched
+    }
+}
+
+/// A triangle projected to grid coordinates, with its height plane and the
+/// edge functions used to find the cells it may touch.
+struct TrianglePlane {
+    /// Height at grid point (0, 0) and slopes per cell along u and v.
+    z0: f32,
+    du: f32,
+    dv: f32,
+    /// Half the height change across a cell: plane max over a cell is the
+    /// centre value plus this.
+    slack: f32,
+    /// Edge functions `a·u + b·v + c ≥ 0` inside, `c` already loosened by
+    /// half a cell so that a cell passes when its most inside corner does.
+    edges: [[f32; 3]; 3],
+}
+
+impl TrianglePlane {
+    /// `None` when the projection is too thin to carry a plane.
+    fn new(g: [Vec2; 3], z: [f32; 3]) -> Option<Self> {
+        let (e1, e2) = (g[1] - g[0], g[2] - g[0]);
+        let det = e1.perp_dot(e2);
+        let scale = e1.length() * e2.length();
+        if det.abs() <= PLANAR_MIN_SINE * scale || det.is_nan() {
+            return None;
+        }
+        let (dz1, dz2) = (z[1] - z[0], z[2] - z[0]);
+        let du = (dz1 * e2.y - e1.y * dz2) / det;
+        let dv = (e1.x * dz2 - dz1 * e2.x) / det;
+        let z0 = z[0] - du * g[0].x - dv * g[0].y;
+        let s = det.signum();
+        let mut edges = [[0.0; 3]; 3];
+        for (k, edge) in edges.iter_mut().enumerate() {
+            let (p, q) = (g[k], g[(k + 1) % 3]);
+            let d = q - p;
+            // E(u, v) = d.x (v − p.y) − d.y (u − p.x), positive inside for s > 0.
+            let a = -s * d.y;
+            let b = s * d.x;
+            let c = s * (d.y * p.x - d.x * p.y);
+            let loosen = 0.5 * (d.x.abs() + d.y.abs()) * (1.0 + 1e-4) + 1e-5;
+            *edge = [a, b, c + loosen];
+        }
+        Some(Self { z0, du, dv, slack: 0.5 * (du.abs() + dv.abs()), edges })
+    }
+
+    #[inline]
+    fn height_at(&self, gu: f32, gv: f32) -> f32 {
+        self.z0 + self.du * gu + self.dv * gv
+    }
+
+    /// Columns `lo..=hi` of row centre `vc` that may touch the triangle,
+    /// within `[i0, i1]`.
+    fn row_span(&self, vc: f32, i0: usize, i1: usize) -> Option<(usize, usize)> {
+        let (mut lo, mut hi) = (i0 as f32, i1 as f32);
+        for &[a, b, c] in &self.edges {
+            let rest = b * vc + c;
+            // a·(i + 0.5) + rest ≥ 0.
+            if a > 0.0 {
+                lo = lo.max((-rest / a - 0.5).ceil());
+            } else if a < 0.0 {
+                hi = hi.min((-rest / a - 0.5).floor());
+            } else if rest < 0.0 {
+                return None;
+            }
+        }
+        (lo <= hi).then_some((lo as usize, hi as usize))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field() -> (HeightField, RootFrame) {
+        let shape = FeatherShape { length: 3.1, width: 1.4, thickness: 0.05, vane_split: 0.4 };
+        let mut f = HeightField::new(32, 16);
+        f.reset(&shape, -0.35);
+        (f, RootFrame::from_normal_and_direction(Vec3::ZERO, Vec3::Z, Vec3::X).unwrap())
+    }
+
+    /// Highest point of the local triangle over cell (i, j), by dense sampling.
+    fn sampled_max(f: &HeightField, tri: [Vec3; 3], i: usize, j: usize) -> Option<f32> {
+        let mut best: Option<f32> = None;
+        let n = 24;
+        for a in 0..=n {
+            for b in 0..=n {
+                let x = ((i as f32 + a as f32 / n as f32) * f.dx).max(f.socket_x);
+                let y = f.y_min + (j as f32 + b as f32 / n as f32) * f.dy;
+                let p = Vec2::new(x, y);
+                let (v0, v1, v2) = (tri[0].truncate(), tri[1].truncate(), tri[2].truncate());
+                let d = (v1 - v0).perp_dot(v2 - v0);
+                let l1 = (v1 - p).perp_dot(v2 - p) / d;
+                let l2 = (v2 - p).perp_dot(v0 - p) / d;
+                let l3 = 1.0 - l1 - l2;
+                if l1 >= -1e-6 && l2 >= -1e-6 && l3 >= -1e-6 {
+                    let z = l1 * tri[0].z + l2 * tri[1].z + l3 * tri[2].z;
+                    best = Some(best.map_or(z, |m| m.max(z)));
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn rasterisation_is_conservative() {
+        let (mut f, _) = field();
+        let mut rng = crate::rng::Rng::new(4);
+        for _ in 0..40 {
+            f.reset(&f.shape.clone(), -0.35);
+            let mut p = || Vec3::new(rng.next_f32() * 3.5 - 0.2, rng.next_f32() * 2.0 - 1.0, rng.next_f32() - 0.5);
+            let tri = [p(), p(), p()];
+            f.rasterise(Layer::Obstacle, tri, 0.0);
+            for j in 0..f.v {
+                for i in 0..f.u {
+                    if let Some(m) = sampled_max(&f, tri, i, j) {
+                        assert!(
+                            f.obstacle_height(i, j) >= m - 1e-5,
+                            "cell ({i},{j}) {} < {m}",
+                            f.obstacle_height(i, j)
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_flat_triangle_fills_its_cells_with_its_height_plus_thickness() {
+        let (mut f, frame) = field();
+        let tri = [Vec3::new(1.0, -0.3, 0.2), Vec3::new(2.0, -0.3, 0.2), Vec3::new(1.5, 0.4, 0.2)];
+        assert!(f.add_obstacle(&frame, &[tri, tri], 0.05));
+        let (dx, dy) = f.cell_size();
+        let (ic, jc) = ((1.5 / dx) as usize, ((0.0 - f.y_min) / dy) as usize);
+        assert!((f.obstacle_height(ic, jc) - 0.25).abs() < 1e-6);
+        assert_eq!(f.obstacle_height(0, 0), f.floor());
+        assert_eq!(f.body_height(ic, jc), f.floor());
+    }
+
+    #[test]
+    fn geometry_below_the_floor_or_outside_is_skipped() {
+        let (mut f, frame) = field();
+        let deep = [Vec3::new(1.0, 0.0, -5.0), Vec3::new(2.0, 0.0, -5.0), Vec3::new(1.5, 0.4, -5.0)];
+        assert!(!f.add_obstacle(&frame, &[deep, deep], 0.05));
+        let behind = [Vec3::new(-3.0, 0.0, 0.0), Vec3::new(-2.0, 0.0, 0.0), Vec3::new(-2.5, 0.4, 0.0)];
+        assert!(!f.add_obstacle(&frame, &[behind, behind], 0.05));
+        assert!(f.obstacle.iter().all(|&h| h == f.floor()));
+    }
+
+    #[test]
+    fn body_facing_away_is_left_out() {
+        let (mut f, frame) = field();
+        let pos = [
+            Vec3::new(-1.0, -2.0, -0.1),
+            Vec3::new(5.0, -2.0, -0.1),
+            Vec3::new(5.0, 2.0, -0.1),
+            Vec3::new(-1.0, 2.0, -0.1),
+        ];
+        // Facing up: kept. The same sheet wound the other way (facing down): left out.
+        let up = BodyIndex::from_mesh(&pos, &[[0, 1, 2], [0, 2, 3]]);
+        f.add_body(&frame, &up);
+        assert!((f.body_height(5, 5) + 0.1).abs() < 1e-5);
+        f.reset(&f.shape.clone(), -0.35);
+        let down = BodyIndex::from_mesh(&pos, &[[0, 2, 1], [0, 3, 2]]);
+        f.add_body(&frame, &down);
+        assert_eq!(f.body_height(5, 5), f.floor());
+    }
+}

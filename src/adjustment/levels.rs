@@ -1,0 +1,386 @@
+//! Adjusting many feathers in order, in parallel by levels.
+//!
+//! The obstacles of feather i are its candidates (roots within reach) that
+//! come earlier in the adjustment order. Give every feather to be adjusted a
+//! level: 1 + the highest level among its obstacles that are adjusted too
+//! (feathers kept fixed count as level 0). A feather reads only obstacles of
+//! lower levels, which are final by the time its level runs, and never a
+//! feather of its own level, so running each level in parallel gives
+//! exactly the serial result, whatever the thread count. Effects are applied
+//! after each level, in a fixed order.
+
+use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather, adjust_feather};
+use crate::body::BodyIndex;
+use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
+use crate::geometry::RootFrame;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Work chunks per worker thread in one level (load balance vs. overhead).
+const CHUNKS_PER_THREAD: usize = 4;
+
+/// Candidate lists in compressed rows: the candidates of root `i` are
+/// `indices[offsets[i]..offsets[i + 1]]` (roots within reach, any order).
+#[derive(Clone, Copy, Debug)]
+pub struct CandidateLists<'a> {
+    /// Row starts, one more than the number of roots.
+    pub offsets: &'a [u32],
+    /// Concatenated candidate indices.
+    pub indices: &'a [u32],
+}
+
+impl<'a> CandidateLists<'a> {
+    /// Wraps CSR arrays.
+    pub fn new(offsets: &'a [u32], indices: &'a [u32]) -> Self {
+        Self { offsets, indices }
+    }
+
+    /// The candidates of root `i`.
+    #[inline]
+    pub fn of(&self, i: usize) -> &'a [u32] {
+        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Number of roots described.
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Whether no root is described.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Which feathers an ordered adjustment touches.
+#[derive(Clone, Copy, Debug)]
+pub enum Selection<'a> {
+    /// Every feather.
+    All,
+    /// Only the marked feathers; the others are fixed obstacles.
+    Subset(&'a [bool]),
+    /// The marked feathers, plus (in order) every feather one of whose
+    /// obstacles was adjusted and moved by more than `threshold` radians in
+    /// pitch or roll (DESIGN.md §5, step 4, θs).
+    Propagate {
+        /// Feathers adjusted in any case.
+        seeds: &'a [bool],
+        /// θs, radians.
+        threshold: f32,
+    },
+}
+
+/// Figures of one ordered adjustment.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AdjustStats {
+    /// Feathers adjusted.
+    pub adjusted: usize,
+    /// Obstacle feathers rasterised, summed over adjusted feathers.
+    pub collision_tests: u64,
+    /// Adjusted feathers where a pitch or roll limit bound.
+    pub clamped: usize,
+    /// Levels run (the length of the longest obstacle chain).
+    pub levels: usize,
+    /// Wall-clock time of the call.
+    pub seconds: f64,
+}
+
+impl AdjustStats {
+    /// Mean collision detections per adjusted feather (0 when none).
+    pub fn collision_tests_per_feather(&self) -> f64 {
+        if self.adjusted == 0 { 0.0 } else { self.collision_tests as f64 / self.adjusted as f64 }
+    }
+}
+
+/// Scratch of one work chunk.
+#[derive(Clone, Debug)]
+struct Worker {
+    field: HeightField,
+    obstacles: Vec<ObstacleFeather>,
+}
+
+/// Reusable state of ordered adjustments: level lists, feather triangles
+/// and per-worker scratch. Keep one per system; after the first frames
+/// nothing it holds grows unless the feather count or thread count does.
+#[derive(Clone, Debug, Default)]
+pub struct Adjuster {
+    triangles: Vec<[[Vec3; 3]; 2]>,
+    in_scope: Vec<bool>,
+    level: Vec<u32>,
+    moved: Vec<bool>,
+    adjusted: Vec<bool>,
+    level_start: Vec<u32>,
+    level_items: Vec<u32>,
+    cursor: Vec<u32>,
+    outcomes: Vec<Option<AdjustOutcome>>,
+    workers: Vec<Worker>,
+}
+
+impl Adjuster {
+    /// Empty state; buffers grow on first use.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Which feathers the last call adjusted.
+    pub fn adjusted(&self) -> &[bool] {
+        &self.adjusted
+    }
+
+    /// Every feather's two triangles at the poses left by the last call.
+    pub fn triangles(&self) -> &[[[Vec3; 3]; 2]] {
+        &self.triangles
+    }
+
+    /// Adjusts the selected feathers in `order` (`order[k]` is the k-th
+    /// feather; `rank` is its inverse). Feather i's obstacles are its
+    /// `candidates` with a smaller rank, at their current poses (adjusted
+    /// ones at their new poses). `poses` holds the current poses and
+    /// receives the new ones. Runs on the current rayon pool; the result is
+    /// bitwise the same for any thread count.
+    ///
+    /// Panics if the slices disagree in length.
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_in_order(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+    ) -> AdjustStats {
+        let start = Instant::now();
+        let n = frames.len();
+        assert!(
+            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.len() == n,
+            "adjust_in_order: frames, shapes, poses, order, rank and candidate rows must all have one entry per feather"
+        );
+        match selection {
+            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => {
+                assert_eq!(s.len(), n, "adjust_in_order: the selection needs one flag per feather")
+            }
+            Selection::All => {}
+        }
+        self.posed_triangles(frames, shapes, poses);
+        self.mark_scope(order, rank, candidates, selection);
+        let levels = self.assign_levels(order, rank, candidates);
+        self.prepare_workers(params);
+        self.moved.clear();
+        self.moved.resize(n, false);
+        self.adjusted.clear();
+        self.adjusted.resize(n, false);
+
+        let mut stats = AdjustStats { levels, ..AdjustStats::default() };
+        let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
+        for l in 0..levels {
+            let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
+            let outcomes = &mut self.outcomes[..items.len()];
+            run_level(&inputs, items, poses, &self.triangles, &self.moved, outcomes, &mut self.workers);
+            for (&i, outcome) in items.iter().zip(outcomes.iter()) {
+                let Some(o) = outcome else { continue };
+                let i = i as usize;
+                let old = poses[i];
+                if let Selection::Propagate { threshold, .. } = selection {
+                    self.moved[i] =
+                        (o.pose.pitch - old.pitch).abs() > threshold || (o.pose.roll - old.roll).abs() > threshold;
+                }
+                poses[i] = o.pose;
+                self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+                self.adjusted[i] = true;
+                stats.adjusted += 1;
+                stats.collision_tests += u64::from(o.collision_tests);
+                stats.clamped += usize::from(o.clamped);
+            }
+        }
+        stats.seconds = start.elapsed().as_secs_f64();
+        stats
+    }
+
+    /// Every feather's triangles at its current pose.
+    fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
+        self.triangles.resize(frames.len(), [[Vec3::ZERO; 3]; 2]);
+        self.triangles
+            .par_iter_mut()
+            .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
+            .for_each(|(t, (f, (s, p)))| *t = feather_triangles(f, s, *p));
+    }
+
+    /// Marks the feathers that may be adjusted. With propagation that is
+    /// the seeds and everything downstream of them in the obstacle relation.
+    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>, selection: Selection<'_>) {
+        let n = order.len();
+        self.in_scope.clear();
+        match selection {
+            Selection::All => self.in_scope.resize(n, true),
+            Selection::Subset(s) => self.in_scope.extend_from_slice(s),
+            Selection::Propagate { seeds, .. } => {
+                self.in_scope.extend_from_slice(seeds);
+                for &i in order {
+                    let i = i as usize;
+                    if !self.in_scope[i] {
+                        let ri = rank[i];
+                        self.in_scope[i] =
+                            candidates.of(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Levels of the feathers in scope and the per-level lists (each in
+    /// order). Returns the number of levels.
+    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>) -> usize {
+        let n = order.len();
+        self.level.clear();
+        self.level.resize(n, 0);
+        let mut levels = 0u32;
+        for &i in order {
+            let i = i as usize;
+            if !self.in_scope[i] {
+                continue;
+            }
+            let ri = rank[i];
+            let below = candidates
+                .of(i)
+                .iter()
+                .filter(|&&j| rank[j as usize] < ri)
+                .map(|&j| self.level[j as usize])
+                .max()
+                .unwrap_or(0);
+            self.level[i] = below + 1;
+            levels = levels.max(below + 1);
+        }
+        let levels = levels as usize;
+        self.level_start.clear();
+        self.level_start.resize(levels + 1, 0);
+        for &i in order {
+            let l = self.level[i as usize] as usize;
+            if l > 0 {
+                self.level_start[l] += 1;
+            }
+        }
+        for l in 0..levels {
+            self.level_start[l + 1] += self.level_start[l];
+        }
+        self.level_items.clear();
+        self.level_items.resize(self.level_start[levels] as usize, 0);
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.level_start[..levels]);
+        for &i in order {
+            let l = self.level[i as usize] as usize;
+            if l > 0 {
+                self.level_items[self.cursor[l - 1] as usize] = i;
+                self.cursor[l - 1] += 1;
+            }
+        }
+        let widest = (0..levels).map(|l| (self.level_start[l + 1] - self.level_start[l]) as usize).max().unwrap_or(0);
+        if self.outcomes.len() < widest {
+            self.outcomes.resize(widest, None);
+        }
+        levels
+    }
+
+    /// One scratch per possible work chunk of the current pool.
+    fn prepare_workers(&mut self, params: &AdjustParams) {
+        let wanted = rayon::current_num_threads().max(1) * CHUNKS_PER_THREAD;
+        while self.workers.len() < wanted {
+            self.workers.push(Worker {
+                field: HeightField::new(params.height_field_u, params.height_field_v),
+                obstacles: Vec::new(),
+            });
+        }
+    }
+}
+
+/// The read-only inputs of every feather of a level.
+struct Inputs<'a> {
+    frames: &'a [RootFrame],
+    shapes: &'a [FeatherShape],
+    rank: &'a [u32],
+    candidates: CandidateLists<'a>,
+    body: &'a BodyIndex,
+    params: &'a AdjustParams,
+    steps: AdjustSteps,
+    selection: Selection<'a>,
+}
+
+/// Adjusts the feathers of one level in parallel chunks; each chunk has its
+/// own worker scratch. Results land in `outcomes` by position.
+fn run_level(
+    inputs: &Inputs<'_>,
+    items: &[u32],
+    poses: &[FeatherPose],
+    triangles: &[[[Vec3; 3]; 2]],
+    moved: &[bool],
+    outcomes: &mut [Option<AdjustOutcome>],
+    workers: &mut [Worker],
+) {
+    let chunk = items.len().div_ceil(workers.len()).max(1);
+    items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
+        |((items, outcomes), worker)| {
+            for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+                *out = adjust_one(inputs, i as usize, poses, triangles, moved, worker);
+            }
+        },
+    );
+}
+
+/// Adjusts feather `i` against its earlier candidates, or `None` when
+/// propagation does not reach it.
+fn adjust_one(
+    inputs: &Inputs<'_>,
+    i: usize,
+    poses: &[FeatherPose],
+    triangles: &[[[Vec3; 3]; 2]],
+    moved: &[bool],
+    worker: &mut Worker,
+) -> Option<AdjustOutcome> {
+    let ri = inputs.rank[i];
+    let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    if let Selection::Propagate { seeds, .. } = inputs.selection
+        && !seeds[i]
+        && !earlier.clone().any(|j| moved[j])
+    {
+        return None;
+    }
+    worker.obstacles.clear();
+    worker
+        .obstacles
+        .extend(earlier.map(|j| ObstacleFeather { triangles: triangles[j], thickness: inputs.shapes[j].thickness }));
+    Some(adjust_feather(
+        &inputs.frames[i],
+        &inputs.shapes[i],
+        poses[i],
+        &worker.obstacles,
+        inputs.body,
+        inputs.params,
+        inputs.steps,
+        &mut worker.field,
+    ))
+}
+
+/// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or
+/// only those marked in `subset` (the others stay as fixed obstacles). For
+/// repeated use (every frame) keep an [`Adjuster`] instead.
+#[allow(clippy::too_many_arguments)]
+pub fn adjust_in_order(
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &mut [FeatherPose],
+    order: &[u32],
+    rank: &[u32],
+    candidates: CandidateLists<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+    subset: Option<&[bool]>,
+) -> AdjustStats {
+    let selection = subset.map_or(Selection::All, Selection::Subset);
+    Adjuster::new().adjust_in_order(frames, shapes, poses, order, rank, candidates, body, params, steps, selection)
+}

@@ -1,0 +1,654 @@
+//! The three adjustment steps on a filled [`HeightField`].
+//!
+//! Geometry. With roll β applied before pitch α, the posed kite is one plane
+//! through the root; over a horizontal point (x, y) of the root frame its
+//! height is `x·tan α + y·tan β / cos α`, and the kite point there has shaft
+//! coordinate `x0 = x / cos α + y0·sin β·tan α` and lateral coordinate
+//! `y0 = y / cos β`. Both are cheap, so the steps work in slopes
+//! (`p = tan α`, lateral slope `q = tan β / cos α`) and never need
+//! per-cell trigonometry.
+//!
+//! Semantics (a height field is a "lid" problem). A cell constrains the
+//! feather only while the posed kite covers it (cell rounded outward by half
+//! a cell in kite coordinates); then the kite's lowest point over the cell
+//! must clear the cell's height. Everything under a cell's top counts as
+//! solid, which is what makes the field safe for steep obstacles whose cell
+//! maximum hides their lower parts. A feather may also clear a tall cell near
+//! its tip by pitching until its tip no longer covers it (the tip then
+//! stops at the obstacle's side instead of climbing over it).
+//!
+//! The smallest clear pitch is found by jumping upward from the lowest
+//! allowed pitch: at the current pitch, every covered cell that is violated
+//! stays violated until its own threshold (the pitch that clears it, or the
+//! one at which the tip leaves it), so the pitch jumps to the largest such
+//! threshold; the loop ends at the first pitch where no covered cell is
+//! violated, which is therefore clear (every cell it covers is checked).
+//!
+//! The root socket (see `height_field`): nothing within the first 2.5 % of
+//! the shaft constrains the pitch; heights beyond it are judged at its end.
+
+use super::height_field::RollLine;
+use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
+use crate::body::BodyIndex;
+use crate::feather::{FeatherPose, FeatherShape};
+use crate::geometry::RootFrame;
+
+/// Jump iterations before giving up (reported as a clamp). Real fields need
+/// two to five.
+const MAX_JUMPS: usize = 64;
+/// Free height under a vane is capped at this fraction of the width when
+/// balancing volumes (empty space far below does not pull the roll).
+const FREE_HEIGHT_CAP_PER_WIDTH: f32 = 0.5;
+/// Newton iterations of step 2 (two to four are typical).
+const MAX_ROLL_CUTS: usize = 24;
+
+/// Adjusts one feather: rasterises its obstacles and the body near its root
+/// into `scratch`, then runs the chosen steps (see the module notes of
+/// [`crate::adjustment`]). `previous` supplies the roll kept by
+/// [`AdjustSteps::FinePitchOnly`]; [`AdjustSteps::Full`] does not read it,
+/// so a full adjustment depends only on the geometry. Allocates nothing once
+/// `scratch` has been used at this resolution.
+#[allow(clippy::too_many_arguments)]
+pub fn adjust_feather(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    previous: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    body: &BodyIndex,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+    scratch: &mut HeightField,
+) -> AdjustOutcome {
+    scratch.set_resolution(params.height_field_u, params.height_field_v);
+    scratch.reset(shape, params.min_pitch);
+    let mut collision_tests = 0u32;
+    for o in obstacles {
+        if scratch.add_obstacle(frame, &o.triangles, o.thickness) {
+            collision_tests += 1;
+        }
+    }
+    scratch.add_body(frame, body);
+    let (pose, clamped) = choose_pose(scratch, previous, params, steps);
+    AdjustOutcome { pose, collision_tests, clamped }
+}
+
+/// Runs the steps on a filled field. Returns the pose and whether a limit bound.
+pub(crate) fn choose_pose(
+    field: &mut HeightField,
+    previous: FeatherPose,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+) -> (FeatherPose, bool) {
+    let (p_lo, p_hi) = (params.min_pitch.tan(), params.max_pitch.tan());
+    let max_roll = params.max_roll.abs();
+    let mut clamped = false;
+    // Step 1 (Full only): pitch with the feather unrolled.
+    let step1 = match steps {
+        AdjustSteps::Full => {
+            field.combine_heights(params, 0.0);
+            let (p1, bound1) = field.min_pitch_slope(0.0, p_lo, p_hi);
+            clamped |= bound1;
+            Some(p1)
+        }
+        AdjustSteps::FinePitchOnly => None,
+    };
+    // Step 2: roll towards balanced free volume under the vanes, as far as
+    // that lowers the feather without lifting any part (Full), or keep the
+    // previous roll (FinePitchOnly).
+    let roll = match step1 {
+        Some(p1) => {
+            let (q, p2, bound2) = field.settling_lateral_slope(p1, max_roll.tan());
+            clamped |= bound2;
+            (q / (1.0 + p2 * p2).sqrt()).atan()
+        }
+        None => previous.roll,
+    };
+    let roll = if roll.is_finite() { roll } else { 0.0 };
+    if roll.abs() > max_roll {
+        clamped = true;
+    }
+    let mut roll = roll.clamp(-max_roll, max_roll);
+    // Step 3: fine pitch with the roll fixed (with the collision allowance).
+    let allowance = params.collision_allowance.max(0.0) * field.shape.thickness;
+    field.combine_heights(params, allowance);
+    let (mut p3, mut bound3) = field.min_pitch_slope(roll, p_lo, p_hi);
+    // Re-check of step 2: step 2 worked from an estimate; if the re-pitched
+    // feather lifts a vane corner above the unrolled one after all, halve
+    // the roll (twice at most), else drop it.
+    if let Some(p1) = step1 {
+        let unrolled = field.highest_corner(p1, 0.0);
+        let mut tries = 0;
+        while roll != 0.0 && field.highest_corner(p3, roll) > unrolled {
+            tries += 1;
+            roll = if tries > 2 { 0.0 } else { 0.5 * roll };
+            (p3, bound3) = field.min_pitch_slope(roll, p_lo, p_hi);
+        }
+    }
+    clamped |= bound3;
+    let pitch = p3.atan() + params.fluffiness.max(0.0);
+    if pitch > params.max_pitch {
+        clamped = true;
+    }
+    let pitch = pitch.clamp(params.min_pitch, params.max_pitch);
+    (FeatherPose { pitch, roll }, clamped)
+}
+
+impl HeightField {
+    /// Fills `need`: per cell the height the feather must clear, the higher
+    /// of the body (plus the clearance angle, taken at the cell's near edge,
+    /// where the pitch test divides by it)
+    /// and the obstacle tops (plus the clearance, minus `allowance`).
+    /// Cells with nothing keep the floor.
+    pub(crate) fn combine_heights(&mut self, params: &AdjustParams, allowance: f32) {
+        let floor = self.floor;
+        let body_slope = params.body_clearance_angle.max(0.0).tan();
+        let obstacle_lift = params.clearance.max(0.0) * self.shape.thickness - allowance;
+        let x_near = self.socket_x;
+        let u = self.u;
+        for j in 0..self.v {
+            let r = j * u..(j + 1) * u;
+            let (body, obstacle, need) = (&self.body[r.clone()], &self.obstacle[r.clone()], &mut self.need[r]);
+            for i in 0..u {
+                let near_x = (self.col_x[i] - 0.5 * self.dx).max(x_near);
+                let b = if body[i] > floor { body[i] + near_x * body_slope } else { floor };
+                let o = if obstacle[i] > floor { obstacle[i] + obstacle_lift } else { floor };
+                need[i] = b.max(o);
+            }
+        }
+    }
+
+    /// The shaft interval `[xa, xb]` of the flat kite where its half width
+    /// is at least `a` (`a ≤ 0`: the whole shaft; empty as `xa > xb`).
+    fn kite_interval(&self, a: f32) -> [f32; 2] {
+        let s = &self.shape;
+        let half = 0.5 * s.width;
+        if a <= 0.0 {
+            return [0.0, s.length];
+        }
+        if a > half {
+            return [1.0, 0.0];
+        }
+        let corner = s.vane_split * s.length;
+        [a / half * corner, s.length - a / half * (s.length - corner)]
+    }
+
+    /// Step 1 and 3: the smallest slope `p = tan α ≥ p_lo` at which the
+    /// kite rolled by `roll` clears every cell it covers. Returns
+    /// `(p, bound)`; `bound` is set when no pitch up to `p_hi` is clear
+    /// (`p = p_hi` then) or when `p_lo` itself is clear (the lower limit binds).
+    pub(crate) fn min_pitch_slope(&mut self, roll: f32, p_lo: f32, p_hi: f32) -> (f32, bool) {
+        let (sb, cb) = roll.sin_cos();
+        let tb = sb / cb;
+        let (half_dx, half_dy) = (0.5 * self.dx, 0.5 * self.dy);
+        let x_near = self.socket_x;
+        // Row spans in kite coordinates, widened by half a cell across.
+        for j in 0..self.v {
+            let a = self.row_y[j].abs() / cb - half_dy / cb;
+            self.row_span[j] = self.kite_interval(a);
+        }
+        let floor = self.floor;
+        let shape = self.shape;
+        let half_width = 0.5 * shape.width;
+        let rise = half_width / (shape.vane_split * shape.length);
+        let mut p = p_lo;
+        for jump in 0..MAX_JUMPS {
+            let sec = (1.0 + p * p).sqrt();
+            let q = tb * sec;
+            // Half a cell in kite shaft coordinates.
+            let mx = half_dx * sec + (sb * p).abs() * half_dy / cb;
+            let mut need = p;
+            let mut violated = false;
+            for j in 0..self.v {
+                let [xa, xb] = self.row_span[j];
+                if xa > xb {
+                    continue;
+                }
+                let (xa, xb) = (xa - mx, xb + mx);
+                let y = self.row_y[j];
+                let k = y / cb * sb;
+                let shear = (sb * p).abs() * (y.abs() + half_dy) / cb;
+                let row = &self.need[j * self.u..(j + 1) * self.u];
+                for (i, &h) in row.iter().enumerate() {
+                    if h <= floor {
+                        continue;
+                    }
+                    let x = self.col_x[i];
+                    if x + half_dx <= x_near {
+                        continue;
+                    }
+                    let x0 = x * sec + k * p;
+                    if x0 < xa || x0 > xb {
+                        continue;
+                    }
+                    // The kite part over this cell lies within the cell's
+                    // rows clipped to the kite's widest half-width over the
+                    // cell's shaft range (tight near the narrow root).
+                    let reach = (((x + half_dx) * sec + shear) * rise).min(half_width) * cb;
+                    let (y_lo, y_hi) = ((y - half_dy).max(-reach), (y + half_dy).min(reach));
+                    if y_lo > y_hi {
+                        continue;
+                    }
+                    let lateral = (q * y_lo).min(q * y_hi);
+                    let (x_near_edge, x_far_edge) = ((x - half_dx).max(x_near), x + half_dx);
+                    let along = if p >= 0.0 { x_near_edge * p } else { x_far_edge * p };
+                    if along + lateral >= h {
+                        continue;
+                    }
+                    violated = true;
+                    let n = h - lateral;
+                    let p_req = if n > 0.0 { n / x_near_edge } else { n / x_far_edge };
+                    need = need.max(cell_threshold(p, p_req, x, k, xb));
+                }
+            }
+            if !violated {
+                return (p, jump == 0);
+            }
+            if need > p_hi {
+                return (p_hi, true);
+            }
+            p = if need > p { need } else { p + 1e-6 * (1.0 + p.abs()) };
+        }
+        (p.min(p_hi), true)
+    }
+
+    /// Height above the tangent plane of the higher vane corner at pitch
+    /// slope `p` and roll `roll`.
+    pub(crate) fn highest_corner(&self, p: f32, roll: f32) -> f32 {
+        let pose = FeatherPose::new(p.atan(), roll);
+        let [_, _, left, right] = self.shape.kite_corners().map(|c| pose.apply_local(c));
+        left.z.max(right.z)
+    }
+
+    /// The lateral slope `q` that balances the free volume under the two
+    /// vanes of the unrolled feather at slope `p` (free height per covered
+    /// cell, capped at half the width). The +y vane's volume grows with `q`
+    /// and the −y vane's shrinks, so the balance is linear in `q`.
+    pub(crate) fn balancing_lateral_slope(&self, p: f32) -> f32 {
+        let sec = (1.0 + p * p).sqrt();
+        let cap = FREE_HEIGHT_CAP_PER_WIDTH * self.shape.width;
+        let (mut free_pos, mut free_neg, mut arm_pos, mut arm_neg) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for j in 0..self.v {
+            let y = self.row_y[j];
+            let [xa, xb] = self.kite_interval(y.abs());
+            if xa > xb {
+                continue;
+            }
+            for i in 0..self.u {
+                let x = self.col_x[i];
+                let x0 = x * sec;
+                if x0 < xa || x0 > xb {
+                    continue;
+                }
+                let c = j * self.u + i;
+                let top = self.body[c].max(self.obstacle[c]);
+                let free = (x * p - top).clamp(0.0, cap);
+                if y > 0.0 {
+                    free_pos += free;
+                    arm_pos += y;
+                } else {
+                    free_neg += free;
+                    arm_neg -= y;
+                }
+            }
+        }
+        let arm = arm_pos + arm_neg;
+        if arm <= 0.0 || arm.is_nan() {
+            return 0.0;
+        }
+        (free_neg - free_pos) / arm
+    }
+
+    /// Step 2. Rolling tips one vane up and the other down. The roll is
+    /// chosen to balance the free volume under the two vanes, but only as
+    /// far as the rolled feather, re-pitched, lies nowhere above the
+    /// unrolled one: the feather pivots down onto its free side and never
+    /// lifts a vane corner above where step 1 put it.
+    ///
+    /// Why the limit: followers lie over a feather's root region and vane
+    /// corners, so a raised corner is a step every later neighbour on that
+    /// side must climb. Measured on our test coats (staggered plane, sphere
+    /// of 600 and 2400 feathers) the mean pitch was 7.8°, 12.1° and 11.4°
+    /// with the limit; letting a corner rise by half a thickness, one, two
+    /// or without bound gave 9.3/10.5/12.3/12.8° on the plane and up to
+    /// 25° on the sphere (and intersections on a torus once unbounded).
+    /// Volume balance alone or "settling" until both vanes bear escalated
+    /// further (15–50°). So the roll only ever lowers the surface later
+    /// feathers see. A consequence of the kite's shape: the vane corner has
+    /// the largest lateral-to-shaft ratio of any covered point, so lowering
+    /// the pitch by rolling nearly always lifts the corner; rolls stay
+    /// small (tenths of a degree on flat skin, more on saddles and at vane
+    /// edges where cell rounding binds) and the step mostly refines.
+    ///
+    /// The rolled feather needs pitch slope `f(q)` at lateral slope `q`
+    /// (the upper envelope of one convex constraint per covered cell); its
+    /// kite lies under the unrolled one iff its corners do:
+    /// `s·L·f(q) + W/2·|q| ≤ s·L·p1`. Both sides are convex in `q`, so the
+    /// allowed rolls form an interval around 0, and the volume-balancing
+    /// roll is clamped into it.
+    ///
+    /// Returns `(q, p, bound)`: the lateral slope, the pitch slope it needs
+    /// (as estimated from the step-1 coverage) and whether `|q|` reached
+    /// `q_lim`.
+    pub(crate) fn settling_lateral_slope(&mut self, p1: f32, q_lim: f32) -> (f32, f32, bool) {
+        self.collect_roll_lines(p1);
+        if self.roll_lines.is_empty() {
+            return (0.0, p1, false);
+        }
+        let corner = 0.5 * self.shape.width / (self.shape.vane_split * self.shape.length);
+        let level = p1.max(self.roll_envelope(0.0, true, 0.0).0);
+        let q_bal = self.balancing_lateral_slope(p1).clamp(-q_lim, q_lim);
+        let q = self.toward_within_level(q_bal, level, corner);
+        let p = self.roll_envelope(q, q >= 0.0, 0.0).0;
+        (q, p, q.abs() >= q_lim * (1.0 - 1e-6))
+    }
+
+    /// One [`RollLine`] per cell covered by the unrolled feather at slope
+    /// `p` (the step-1 pose), judged at the cell's worst corner.
+    fn collect_roll_lines(&mut self, p: f32) {
+        self.roll_lines.clear();
+        let (half_dx, half_dy) = (0.5 * self.dx, 0.5 * self.dy);
+        let x_near = self.socket_x;
+        let half_width = 0.5 * self.shape.width;
+        let rise = half_width / (self.shape.vane_split * self.shape.length);
+        let sec = (1.0 + p * p).sqrt();
+        let mx = half_dx * sec;
+        for j in 0..self.v {
+            let y = self.row_y[j];
+            let [xa, xb] = self.kite_interval(y.abs() - half_dy);
+            if xa > xb {
+                continue;
+            }
+            let (xa, xb) = (xa - mx, xb + mx);
+            for i in 0..self.u {
+                let h = self.need[j * self.u + i];
+                let x = self.col_x[i];
+                if h <= self.floor || x + half_dx <= x_near {
+                    continue;
+                }
+                let x0 = x * sec;
+                if x0 < xa || x0 > xb {
+                    continue;
+                }
+                let reach = ((x + half_dx) * sec * rise).min(half_width);
+                let (y_lo, y_hi) = ((y - half_dy).max(-reach), (y + half_dy).min(reach));
+                if y_lo > y_hi {
+                    continue;
+                }
+                let x_e = if h > 0.0 { (x - half_dx).max(x_near) } else { x + half_dx };
+                self.roll_lines.push(RollLine { a: h / x_e, c_pos: -y_lo / x_e, c_neg: -y_hi / x_e });
+            }
+        }
+    }
+
+    /// The envelope `f(q) + corner·|q|`, with the active line's slope and
+    /// intercept there. `positive` picks the branch at `q = 0`.
+    fn roll_envelope(&self, q: f32, positive: bool, corner: f32) -> (f32, f32, f32) {
+        let positive = if q == 0.0 { positive } else { q > 0.0 };
+        let extra = if positive { corner } else { -corner };
+        let mut best = (f32::NEG_INFINITY, 0.0, 0.0);
+        for l in &self.roll_lines {
+            let c = if positive { l.c_pos } else { l.c_neg } + extra;
+            let v = l.a + c * q;
+            if v > best.0 || (v == best.0 && (c > best.1) == positive) {
+                best = (v, c, l.a);
+            }
+        }
+        best
+    }
+
+    /// Moves from 0 (inside the level set of the convex envelope with
+    /// corner weight `corner`) towards `target` as far as it stays within
+    /// `level`: Newton steps from the target's side, which stay outside the
+    /// level set and approach its edge.
+    fn toward_within_level(&self, target: f32, level: f32, corner: f32) -> f32 {
+        let mut q = target;
+        for _ in 0..MAX_ROLL_CUTS {
+            let (f, s, a) = self.roll_envelope(q, target >= 0.0, corner);
+            if f <= level {
+                return q;
+            }
+            if s == 0.0 {
+                break;
+            }
+            let next = (level - a) / s;
+            if next * q < 0.0 || next.abs() >= q.abs() {
+                break;
+            }
+            q = next;
+        }
+        0.0
+    }
+}
+
+/// The slope at which a violated cell stops being violated: `p_req` (the
+/// slope that clears it), or earlier if the tip stops covering it first
+/// (shaft coordinate `x·sec α + k·tan α` passing `xb`). Never below `p`.
+#[inline]
+fn cell_threshold(p: f32, p_req: f32, x: f32, k: f32, xb: f32) -> f32 {
+    if p_req <= p {
+        return p_req;
+    }
+    let x0_at_req = x * (1.0 + p_req * p_req).sqrt() + k * p_req;
+    if x0_at_req <= xb || x * x <= k * k {
+        return p_req;
+    }
+    // Larger root of (x² − k²) p² + 2 xb k p + (x² − xb²) = 0.
+    let disc = xb * xb + k * k - x * x;
+    if disc < 0.0 {
+        return p_req;
+    }
+    let exit = (-xb * k + x * disc.sqrt()) / (x * x - k * k);
+    exit.clamp(p, p_req)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::feather::feather_triangles;
+    use glam::Vec3;
+
+    fn plane_body(size: f32) -> BodyIndex {
+        let pos = [
+            Vec3::new(-size, -size, 0.0),
+            Vec3::new(size, -size, 0.0),
+            Vec3::new(size, size, 0.0),
+            Vec3::new(-size, size, 0.0),
+        ];
+        BodyIndex::from_mesh(&pos, &[[0, 1, 2], [0, 2, 3]])
+    }
+
+    fn frame_at(x: f32, y: f32) -> RootFrame {
+        RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), Vec3::Z, Vec3::X).unwrap()
+    }
+
+    fn adjust(
+        frame: &RootFrame,
+        obstacles: &[ObstacleFeather],
+        body: &BodyIndex,
+        params: &AdjustParams,
+    ) -> AdjustOutcome {
+        let shape = FeatherShape::for_spacing(1.0);
+        let mut field = HeightField::new(params.height_field_u, params.height_field_v);
+        adjust_feather(frame, &shape, FeatherPose::default(), obstacles, body, params, AdjustSteps::Full, &mut field)
+    }
+
+    #[test]
+    fn alone_on_a_plane_the_feather_lies_at_the_body_clearance() {
+        let params = AdjustParams::default();
+        let out = adjust(&frame_at(0.0, 0.0), &[], &plane_body(10.0), &params);
+        assert!((out.pose.pitch - params.body_clearance_angle).abs() < 2e-3, "{:?}", out.pose);
+        assert!(out.pose.roll.abs() < 1e-4);
+        assert!(!out.clamped);
+        assert_eq!(out.collision_tests, 0);
+    }
+
+    #[test]
+    fn skin_tilted_sideways_rolls_the_feather_onto_it() {
+        // The root's normal is +z but the skin rises towards +y (as where an
+        // interpolated normal differs from the face normal): rolling lays
+        // the feather on the skin instead of pitching it over the slope.
+        let params = AdjustParams::default();
+        let slope = 0.1;
+        let pos = [
+            Vec3::new(-10.0, -10.0, -10.0 * slope),
+            Vec3::new(10.0, -10.0, -10.0 * slope),
+            Vec3::new(10.0, 10.0, 10.0 * slope),
+            Vec3::new(-10.0, 10.0, 10.0 * slope),
+        ];
+        let body = BodyIndex::from_mesh(&pos, &[[0, 1, 2], [0, 2, 3]]);
+        let frame = frame_at(0.0, 0.0);
+        let shape = FeatherShape::for_spacing(1.0);
+        let mut field = HeightField::new(32, 16);
+        let mut run =
+            |steps| adjust_feather(&frame, &shape, FeatherPose::default(), &[], &body, &params, steps, &mut field).pose;
+        let rolled = run(AdjustSteps::Full);
+        let flat = run(AdjustSteps::FinePitchOnly);
+        assert!(rolled.roll > 0.5 * slope, "{rolled:?}");
+        assert!(rolled.pitch < flat.pitch - 0.02, "{rolled:?} vs {flat:?}");
+    }
+
+    #[test]
+    fn rolling_never_lifts_a_vane_corner() {
+        let params = AdjustParams::default();
+        let body = plane_body(10.0);
+        let shape = FeatherShape::for_spacing(1.0);
+        let frame = frame_at(0.0, 0.0);
+        let mut rng = crate::rng::Rng::new(21);
+        let mut field = HeightField::new(32, 16);
+        for _ in 0..40 {
+            let obstacles: Vec<ObstacleFeather> = (0..6)
+                .map(|_| {
+                    let at = frame_at(0.3 + 2.5 * rng.next_f32(), 2.4 * rng.next_f32() - 1.2);
+                    let pose = FeatherPose::new(0.2 * rng.next_f32(), 0.2 * rng.next_f32() - 0.1);
+                    ObstacleFeather { triangles: feather_triangles(&at, &shape, pose), thickness: shape.thickness }
+                })
+                .collect();
+            let run = |steps, field: &mut HeightField| {
+                adjust_feather(&frame, &shape, FeatherPose::default(), &obstacles, &body, &params, steps, field).pose
+            };
+            let rolled = run(AdjustSteps::Full, &mut field);
+            let flat = run(AdjustSteps::FinePitchOnly, &mut field);
+            let corner = |p: FeatherPose| {
+                let [_, _, left, right] = shape.kite_corners().map(|c| p.apply_local(c));
+                left.z.max(right.z)
+            };
+            assert!(
+                corner(rolled) <= corner(flat) + 0.05 * shape.thickness,
+                "{rolled:?} lifts a corner above {flat:?}"
+            );
+            assert!(rolled.pitch <= flat.pitch + 1e-4);
+        }
+    }
+
+    #[test]
+    fn an_obstacle_over_the_root_clamps() {
+        let params = AdjustParams::default();
+        let body = plane_body(10.0);
+        let shape = FeatherShape::for_spacing(1.0);
+        // A feather hovering right over the root, half a length up.
+        let mut other = frame_at(-0.5, 0.0);
+        other.position.z = 0.3;
+        let obstacle =
+            ObstacleFeather { triangles: feather_triangles(&other, &shape, FeatherPose::default()), thickness: 0.1 };
+        let out = adjust(&frame_at(0.0, 0.0), &[obstacle], &body, &params);
+        assert!(out.clamped);
+        assert!((out.pose.pitch - params.max_pitch).abs() < 1e-6);
+    }
+
+    #[test]
+    fn convex_skin_lets_the_feather_droop_and_concave_skin_lifts_it() {
+        let params = AdjustParams::default();
+        let shape = FeatherShape::for_spacing(1.0);
+        // A cylinder of radius r along y, root on top: convex along the shaft.
+        let cylinder = |r: f32, inside: bool| {
+            let (n, m) = (128usize, 8usize);
+            let mut pos = Vec::new();
+            for a in 0..n {
+                let t = a as f32 / n as f32 * std::f32::consts::TAU;
+                for b in 0..=m {
+                    let y = -3.0 + 6.0 * b as f32 / m as f32;
+                    pos.push(Vec3::new(r * t.sin(), y, r * t.cos() - r));
+                }
+            }
+            let mut tris = Vec::new();
+            for a in 0..n {
+                for b in 0..m {
+                    let (i0, i1) = ((a * (m + 1) + b) as u32, (((a + 1) % n) * (m + 1) + b) as u32);
+                    let t = [[i0, i1, i1 + 1], [i0, i1 + 1, i0 + 1]];
+                    for tri in t {
+                        tris.push(if inside { [tri[0], tri[2], tri[1]] } else { tri });
+                    }
+                }
+            }
+            (BodyIndex::from_mesh(&pos, &tris), pos)
+        };
+        let mut field = HeightField::new(32, 16);
+        let frame = frame_at(0.0, 0.0);
+        let (convex, _) = cylinder(1.5, false);
+        let out = adjust_feather(
+            &frame,
+            &shape,
+            FeatherPose::default(),
+            &[],
+            &convex,
+            &params,
+            AdjustSteps::Full,
+            &mut field,
+        );
+        assert!(out.pose.pitch < 0.0, "convex {:?}", out.pose);
+        // Inside a cylinder the root sits at the bottom and the wall rises in front.
+        let concave_frame = RootFrame::from_normal_and_direction(Vec3::new(0.0, 0.0, -8.0), Vec3::Z, Vec3::X).unwrap();
+        let (concave, _) = cylinder(4.0, true);
+        let out = adjust_feather(
+            &concave_frame,
+            &shape,
+            FeatherPose::default(),
+            &[],
+            &concave,
+            &params,
+            AdjustSteps::Full,
+            &mut field,
+        );
+        // The wall rises about x²/(2r) ahead: at x = L that is 0.4 L/r·L.
+        assert!(out.pose.pitch > 0.3, "concave {:?}", out.pose);
+    }
+
+    #[test]
+    fn fine_pitch_only_keeps_the_previous_roll() {
+        let params = AdjustParams::default();
+        let shape = FeatherShape::for_spacing(1.0);
+        let mut field = HeightField::new(32, 16);
+        let out = adjust_feather(
+            &frame_at(0.0, 0.0),
+            &shape,
+            FeatherPose::new(0.4, 0.1),
+            &[],
+            &plane_body(10.0),
+            &params,
+            AdjustSteps::FinePitchOnly,
+            &mut field,
+        );
+        assert_eq!(out.pose.roll, 0.1);
+        // The lowered −y vane near the root needs a little pitch on a plane.
+        assert!(out.pose.pitch > params.body_clearance_angle && out.pose.pitch < 0.2, "{:?}", out.pose);
+    }
+
+    #[test]
+    fn fluffiness_adds_lift_and_the_limit_reports() {
+        let body = plane_body(10.0);
+        let base = adjust(&frame_at(0.0, 0.0), &[], &body, &AdjustParams::default()).pose.pitch;
+        let fluffy = adjust(&frame_at(0.0, 0.0), &[], &body, &AdjustParams { fluffiness: 0.2, ..Default::default() });
+        assert!((fluffy.pose.pitch - base - 0.2).abs() < 1e-5);
+        assert!(!fluffy.clamped);
+        let over = adjust(&frame_at(0.0, 0.0), &[], &body, &AdjustParams { fluffiness: 2.0, ..Default::default() });
+        assert!(over.clamped && over.pose.pitch == AdjustParams::default().max_pitch);
+    }
+
+    #[test]
+    fn threshold_of_a_cell_leaving_the_tip() {
+        // x = 3, kite ends at xb = 3.2: the tip leaves when 3·sec α = 3.2.
+        let exit = cell_threshold(0.0, 10.0, 3.0, 0.0, 3.2);
+        assert!((3.0 * (1.0 + exit * exit).sqrt() - 3.2).abs() < 1e-4);
+        assert_eq!(cell_threshold(0.0, 0.1, 3.0, 0.0, 3.2), 0.1);
+    }
+}

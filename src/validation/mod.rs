@@ -1,0 +1,313 @@
+//! Exact checks of a feather coat, independent of the height field
+//! (DESIGN.md §6). Everything runs in parallel with rayon and gives the same
+//! answer for any thread count: pairs and indices come out sorted, counts
+//! are integers and sums run in index order.
+
+mod tri_tri;
+
+pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
+
+use crate::body::{Aabb, BodyIndex, TriangleGrid, ray_triangle};
+use crate::feather::{FeatherPose, FeatherShape, shaft_direction};
+use crate::geometry::RootFrame;
+use crate::rng::Rng;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Feathers may cross the body this close to their root (fraction of the
+/// length, along the shaft): that is where they enter the skin.
+pub(crate) const ROOT_ALLOWANCE: f32 = 0.05;
+
+/// The figures of one validation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Validation {
+    /// Pairs `(i, j)`, `i < j`, of feathers whose triangles intersect, sorted.
+    pub intersecting_pairs: Vec<(u32, u32)>,
+    /// Feathers crossing the body more than 5 % of their length from the root, sorted.
+    pub body_penetrations: Vec<u32>,
+    /// Fraction of surface probes whose normal ray meets a feather within
+    /// the longest feather length.
+    pub coverage: f64,
+    /// Number of probes behind `coverage`.
+    pub probes: usize,
+    /// Mean pitch, degrees.
+    pub mean_pitch_deg: f64,
+}
+
+/// Runs every check. `feather_triangles[i]` are feather i's triangles at
+/// `poses[i]` (as [`crate::feather::feather_triangles`] gives them); the
+/// probe surface is the mesh (`positions`, `triangles`), usually the body
+/// at the same pose; `probes` probe points are placed with `seed`.
+#[allow(clippy::too_many_arguments)]
+pub fn validate(
+    feather_triangles: &[[[Vec3; 3]; 2]],
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &[FeatherPose],
+    body: &BodyIndex,
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    probes: usize,
+    seed: u64,
+) -> Validation {
+    let grid = feather_grid(feather_triangles);
+    let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
+    Validation {
+        intersecting_pairs: intersecting_pairs_in(&grid),
+        body_penetrations: body_penetrations(frames, shapes, poses, body),
+        coverage: coverage_in(&grid, longest, positions, triangles, probes, seed),
+        probes,
+        mean_pitch_deg: mean_pitch_deg(poses),
+    }
+}
+
+/// A grid over every feather triangle; triangle `2i + k` is triangle `k`
+/// of feather `i`.
+fn feather_grid(feather_triangles: &[[[Vec3; 3]; 2]]) -> TriangleGrid {
+    let mut grid = TriangleGrid::new();
+    grid.rebuild(feather_triangles.iter().flat_map(|f| f.iter().copied()), None);
+    grid
+}
+
+/// Pairs of distinct feathers whose triangles intersect (exact test, see
+/// [`triangles_intersect`]); any two feathers are compared, not only
+/// neighbours. Sorted, without repeats.
+pub fn intersecting_pairs(feather_triangles: &[[[Vec3; 3]; 2]]) -> Vec<(u32, u32)> {
+    intersecting_pairs_in(&feather_grid(feather_triangles))
+}
+
+fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
+    let mut pairs: Vec<(u32, u32)> = (0..grid.cell_count())
+        .into_par_iter()
+        .flat_map_iter(|cell| {
+            let items = grid.cell_items(cell);
+            let mut found = Vec::new();
+            for (k, &ta) in items.iter().enumerate() {
+                let ba = grid.bounds(ta);
+                for &tb in &items[k + 1..] {
+                    let (fa, fb) = (ta / 2, tb / 2);
+                    if fa == fb {
+                        continue;
+                    }
+                    let bb = grid.bounds(tb);
+                    if !ba.overlaps(&bb) || !grid.is_first_shared_cell(cell, &ba, &bb) {
+                        continue;
+                    }
+                    if triangles_intersect(&grid.corners(ta), &grid.corners(tb)) {
+                        found.push((fa.min(fb), fa.max(fb)));
+                    }
+                }
+            }
+            found
+        })
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
+}
+
+/// The part of a feather more than `ROOT_ALLOWANCE` of its length from
+/// the root along the posed shaft, as up to four triangles (each vane
+/// clipped to a quadrilateral).
+pub fn feather_beyond_root(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Vec<[Vec3; 3]> {
+    let tris = crate::feather::feather_triangles(frame, shape, pose);
+    let axis = shaft_direction(frame, pose);
+    let cut = ROOT_ALLOWANCE * shape.length;
+    let mut out = Vec::with_capacity(4);
+    for t in &tris {
+        clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, &mut out);
+    }
+    out
+}
+
+/// Clips a triangle to `side(p) ≥ 0` and appends the kept part as a fan.
+fn clip_triangle(t: &[Vec3; 3], side: impl Fn(Vec3) -> f32, out: &mut Vec<[Vec3; 3]>) {
+    let s = t.map(&side);
+    let mut poly: [Vec3; 4] = [Vec3::ZERO; 4];
+    let mut n = 0;
+    for k in 0..3 {
+        let (i, j) = (k, (k + 1) % 3);
+        if s[i] >= 0.0 {
+            poly[n] = t[i];
+            n += 1;
+        }
+        if (s[i] >= 0.0) != (s[j] >= 0.0) {
+            poly[n] = t[i] + (t[j] - t[i]) * (s[i] / (s[i] - s[j]));
+            n += 1;
+        }
+    }
+    for k in 1..n.saturating_sub(1) {
+        out.push([poly[0], poly[k], poly[k + 1]]);
+    }
+}
+
+/// Feathers that penetrate the body more than 5 % of their length from the
+/// root (measured along the posed shaft): their triangles there cross a
+/// body triangle (exact test), or, crossing none, have a corner under the
+/// skin (a feather drooping or rolling into the body from its root crosses
+/// the skin only in the tolerated part, or touches it along the shaft; a
+/// part of it is then inside). Sorted.
+pub fn body_penetrations(
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &[FeatherPose],
+    body: &BodyIndex,
+) -> Vec<u32> {
+    let hits: Vec<bool> = (0..frames.len())
+        .into_par_iter()
+        .map_init(Vec::new, |ids, i| {
+            let part = feather_beyond_root(&frames[i], &shapes[i], poses[i]);
+            let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
+                return false;
+            };
+            body.triangles_in_box(&bounds, ids);
+            let crosses = ids.iter().any(|&t| {
+                let tri = body.corners(t);
+                part.iter().any(|p| triangles_intersect(p, &tri))
+            });
+            // Without a crossing each triangle lies on one side of the skin
+            // (the two vanes may lie on different sides, meeting it along
+            // the shaft): its first corner clearly off the skin tells which.
+            crosses
+                || part.iter().any(|t| {
+                    t.iter().find_map(|&p| side_of_skin(body, p, shapes[i].length, ids)).is_some_and(|under| under)
+                })
+        })
+        .collect();
+    hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
+}
+
+/// Which side of the body surface `p` is on: `Some(true)` under it,
+/// `Some(false)` above it, `None` on it (within the contact tolerance) or
+/// with no skin within `reach`. The side is judged from the nearest skin
+/// point by the normals of every face at the nearest distance, summed, so
+/// that edges and corners of the skin judge by all their faces. The search
+/// starts small and widens, since feather corners are usually near skin.
+fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -> Option<bool> {
+    let mut radius = reach / 64.0;
+    let nearest = loop {
+        if let Some(n) = body.closest_point(p, radius, scratch) {
+            break n;
+        }
+        if radius >= reach {
+            return None;
+        }
+        radius = (radius * 4.0).min(reach);
+    };
+    let tolerance = 1e-6 * reach.max(p.abs().max_element());
+    if nearest.distance <= tolerance {
+        return None;
+    }
+    let tie = nearest.distance * (1.0 + 1e-4) + tolerance;
+    let normal: Vec3 = scratch
+        .iter()
+        .filter(|&&t| (crate::body::closest_point_on_triangle(p, body.corners(t)) - p).length() <= tie)
+        .map(|&t| body.normal(t))
+        .sum();
+    Some((p - nearest.point).dot(normal) < 0.0)
+}
+
+/// Fraction of `probes` random surface points (area-weighted, placed with
+/// `seed`) whose normal ray meets a feather triangle within `reach`. The
+/// normal is the interpolated area-weighted vertex normal.
+pub fn coverage(
+    feather_triangles: &[[[Vec3; 3]; 2]],
+    reach: f32,
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    probes: usize,
+    seed: u64,
+) -> f64 {
+    coverage_in(&feather_grid(feather_triangles), reach, positions, triangles, probes, seed)
+}
+
+fn coverage_in(
+    grid: &TriangleGrid,
+    reach: f32,
+    positions: &[Vec3],
+    triangles: &[[u32; 3]],
+    probes: usize,
+    seed: u64,
+) -> f64 {
+    let points = surface_probes(positions, triangles, probes, seed);
+    if points.is_empty() {
+        return 0.0;
+    }
+    let covered: Vec<bool> = points
+        .par_iter()
+        .map(|&(p, n)| grid.ray_cast(p, n, reach, |t| ray_triangle(p, n, grid.corners(t))).is_some())
+        .collect();
+    covered.iter().filter(|&&c| c).count() as f64 / points.len() as f64
+}
+
+/// `count` area-weighted random points of the mesh with their
+/// interpolated unit normals.
+pub fn surface_probes(positions: &[Vec3], triangles: &[[u32; 3]], count: usize, seed: u64) -> Vec<(Vec3, Vec3)> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    let mut cumulative = Vec::with_capacity(triangles.len());
+    let mut total = 0.0f64;
+    for t in triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let area2 = (b - a).cross(c - a);
+        for &v in t {
+            normals[v as usize] += area2;
+        }
+        total += 0.5 * area2.length() as f64;
+        cumulative.push(total);
+    }
+    if total <= 0.0 || total.is_nan() {
+        return Vec::new();
+    }
+    let mut rng = Rng::new(seed);
+    (0..count)
+        .map(|_| {
+            let target = rng.next_f64() * total;
+            let t = cumulative.partition_point(|&c| c <= target).min(triangles.len() - 1);
+            let (r1, r2) = (rng.next_f32().sqrt(), rng.next_f32());
+            let w = [1.0 - r1, r1 * (1.0 - r2), r1 * r2];
+            let tri = triangles[t];
+            let p = (0..3).map(|k| positions[tri[k] as usize] * w[k]).sum::<Vec3>();
+            let [a, b, c] = tri.map(|v| positions[v as usize]);
+            let face = (b - a).cross(c - a).normalize_or_zero();
+            let n = (0..3).map(|k| normals[tri[k] as usize].normalize_or_zero() * w[k]).sum::<Vec3>();
+            (p, n.try_normalize().unwrap_or(face))
+        })
+        .collect()
+}
+
+/// Mean pitch in degrees (summed in index order).
+pub fn mean_pitch_deg(poses: &[FeatherPose]) -> f64 {
+    if poses.is_empty() {
+        return 0.0;
+    }
+    poses.iter().map(|p| p.pitch as f64).sum::<f64>() / poses.len() as f64 * (180.0 / std::f64::consts::PI)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clipping_keeps_the_far_part() {
+        let t = [Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0), Vec3::new(4.0, 2.0, 0.0)];
+        let mut out = Vec::new();
+        clip_triangle(&t, |p| p.x - 1.0, &mut out);
+        assert_eq!(out.len(), 2);
+        let area: f32 = out.iter().map(|t| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()).sum();
+        // Area 10, less the corner x ≤ 1 under the edge y = x/2 (area 1/4).
+        let (whole, cut_off) = (10.0, 0.25);
+        assert!((area - (whole - cut_off)).abs() < 1e-4, "{area}");
+        assert!(out.iter().flatten().all(|p| p.x >= 1.0 - 1e-6));
+    }
+
+    #[test]
+    fn probes_lie_on_the_mesh_with_its_normal() {
+        let pos = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let probes = surface_probes(&pos, &[[0, 1, 2], [0, 2, 3]], 100, 5);
+        assert_eq!(probes.len(), 100);
+        for (p, n) in probes {
+            assert!(p.z.abs() < 1e-6 && (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y));
+            assert!((n - Vec3::Z).length() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! Reads the triangle meshes of a `.glb` test model into flat arrays, at the
+//! rest shape: each mesh node's world transform applied, morph targets
+//! blended with the node's (else the mesh's) default weights. Buffer data
+//! comes from the GLB's binary chunk only (the models embed everything).
+//!
+//! The models live in `../shared/data` relative to the crate root (see
+//! [`data_dir`] for the override); when one
+//! is absent, [`load_model`] says so on stderr and returns `None`, and the
+//! calling test reports itself as skipped.
+
+use super::shapes::Shape;
+use glam::{Mat4, Vec3};
+use std::path::PathBuf;
+
+/// Where the shared test models are: `../shared/data` from the crate root,
+/// or `$PLUMAGE_DATA_DIR` when set (e.g. for a git worktree elsewhere).
+pub fn data_dir() -> PathBuf {
+    match std::env::var_os("PLUMAGE_DATA_DIR") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
+    }
+}
+
+/// Loads every triangle primitive of every mesh node of the default scene
+/// of `file` (e.g. "Flamingo.glb"). `None`, with a message, when the file is
+/// missing.
+pub fn load_model(file: &str) -> Option<Shape> {
+    let path = data_dir().join(file);
+    let bytes = match std::fs::read(&path) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("SKIPPED: test model {} not available ({e}); the test checks nothing.", path.display());
+            return None;
+        }
+    };
+    Some(read_glb(&bytes).unwrap_or_else(|e| panic!("{} is not a readable GLB: {e}", path.display())))
+}
+
+/// Parses GLB bytes into one flat mesh.
+pub fn read_glb(bytes: &[u8]) -> Result<Shape, String> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| e.to_string())?;
+    let blob: Option<&[u8]> = gltf.blob.as_deref();
+    let scene = gltf.default_scene().or_else(|| gltf.scenes().next()).ok_or("no scene")?;
+    let mut out = Shape::default();
+    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+            for primitive in mesh.primitives() {
+                if primitive.mode() != gltf::mesh::Mode::Triangles {
+                    continue;
+                }
+                append_primitive(&mut out, &primitive, blob, weights, world)?;
+            }
+        }
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    if out.indices.is_empty() {
+        return Err("no triangles".into());
+    }
+    Ok(out)
+}
+
+fn append_primitive(
+    out: &mut Shape,
+    primitive: &gltf::Primitive,
+    blob: Option<&[u8]>,
+    weights: &[f32],
+    world: Mat4,
+) -> Result<(), String> {
+    let reader = primitive.reader(|buffer| match buffer.source() {
+        gltf::buffer::Source::Bin => blob,
+        gltf::buffer::Source::Uri(_) => None,
+    });
+    let mut positions: Vec<Vec3> =
+        reader.read_positions().ok_or("primitive without positions")?.map(Vec3::from).collect();
+    for (target, (displacements, _, _)) in reader.read_morph_targets().enumerate() {
+        let w = weights.get(target).copied().unwrap_or(0.0);
+        if let (Some(displacements), true) = (displacements, w != 0.0) {
+            for (p, d) in positions.iter_mut().zip(displacements) {
+                *p += Vec3::from(d) * w;
+            }
+        }
+    }
+    let base = out.vertex_count() as u32;
+    for p in &positions {
+        let q = world.transform_point3(*p);
+        out.positions.extend_from_slice(&[q.x, q.y, q.z]);
+    }
+    match reader.read_indices() {
+        Some(indices) => out.indices.extend(indices.into_u32().map(|i| i + base)),
+        None => out.indices.extend((0..positions.len() as u32).map(|i| i + base)),
+    }
+    Ok(())
+}

@@ -1,0 +1,6 @@
+//! Helpers shared by the integration tests: procedural meshes and the glTF
+//! test-model loader. Each test binary uses only some of them.
+#![allow(dead_code)]
+
+pub mod gltf_mesh;
+pub mod shapes;
