@@ -396,6 +396,10 @@ typedef struct PlumageFeather {
    * Thickness.
    */
   float thickness;
+  /**
+   * Always 0 (keeps the struct free of padding bytes).
+   */
+  uint32_t reserved;
 } PlumageFeather;
 
 /**
@@ -458,6 +462,10 @@ typedef struct PlumageOrderingStats {
    * Edges whose head comes after their tail in the order (0 when correct).
    */
   uint32_t violations;
+  /**
+   * Always 0 (keeps the struct free of padding bytes).
+   */
+  uint32_t reserved;
   /**
    * Wall time of neighbourhoods, priorities and ordering.
    */

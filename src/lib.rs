@@ -11,6 +11,7 @@
 pub mod adjustment;
 pub mod animation;
 pub mod body;
+pub mod coat;
 pub mod config;
 pub mod error;
 pub mod feather;

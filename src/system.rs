@@ -1,42 +1,120 @@
-//! `System`: the safe Rust face of Plumage. It owns the welded mesh and
-//! everything computed on it, and is what the FFI handle wraps.
+//! `System`: the safe Rust face of Plumage. It owns the welded mesh, the
+//! feathers' rest binding (the dressing) and their state at the current pose
+//! (the coat), and is what the FFI handle wraps.
 
-use crate::config::Config;
+use crate::adjustment::AdjustParams;
+use crate::animation::step::{StepWorkspace, step_coat};
+use crate::coat::{Coat, Dressing, Workspace};
+use crate::config::{Config, Mode};
 use crate::error::Result;
+use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
+use crate::ordering::NeighbourParams;
+use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
+use crate::sampling::sample_roots;
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
+use crate::surface::Surface;
+use crate::validation::validate;
+use glam::Vec3;
+
+/// Probes per feather for the coverage figure of [`System::validate`].
+const COVERAGE_PROBES_PER_FEATHER: usize = 4;
+/// Bounds on the number of coverage probes.
+const COVERAGE_PROBES_MIN: usize = 2_000;
+const COVERAGE_PROBES_MAX: usize = 200_000;
 
 /// A feathered surface: created at the rest pose, then stepped frame by frame.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct System {
     config: Config,
+    pool: WorkerPool,
     mesh: WeldedMesh,
-    frames_stepped: u64,
+    dressing: Dressing,
+    sampling: SamplingReport,
+    coat: Coat,
+    records: Vec<FeatherRecord>,
+    triangles: Vec<[[f32; 3]; 6]>,
+    work: Workspace,
+    step_work: StepWorkspace,
+    frame_positions: Vec<Vec3>,
     #[cfg(feature = "test-hooks")]
-    test_panic: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    test_panic: std::sync::atomic::AtomicBool,
 }
 
 impl System {
-    /// Checks the configuration and the mesh, and welds the mesh.
+    /// Checks the configuration and the mesh, plants the roots, orders and
+    /// adjusts the feathers at the rest pose.
     pub fn new(config: &Config, mesh: &MeshInput<'_>) -> Result<Self> {
         Self::new_with_progress(config, mesh, &Progress::none())
     }
 
-    /// As [`System::new`], reporting to `progress`, which may stop it.
+    /// As [`System::new`], reporting to `progress`, which may stop it (then
+    /// nothing is created).
     pub fn new_with_progress(config: &Config, mesh: &MeshInput<'_>, progress: &Progress) -> Result<Self> {
         config.validate()?;
         progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
-        progress.check(Phase::Preparing, 1.0)?;
-        Ok(Self {
+        let pool = WorkerPool::new(config.threads)?;
+        let surface = Surface::new(&welded);
+        let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
+        let fields = Fields::new(
+            &welded,
+            &surface,
+            attribute(mesh.orientations, 3).as_deref(),
+            attribute(mesh.spacing_scale, 1).as_deref(),
+            attribute(mesh.length_scale, 1).as_deref(),
+            attribute(mesh.width_scale, 1).as_deref(),
+            config,
+        )?;
+        progress.check(Phase::Sampling, 0.0)?;
+        let sampling = pool.install(|| sample_roots(&welded, &surface, &fields, config))?;
+        progress.check(Phase::Sampling, 1.0)?;
+        let shapes = Dressing::shapes_for(&sampling.roots, config);
+        let dressing = Dressing {
+            surface,
+            triangles: welded.triangles.clone(),
+            source_triangle: welded.source_triangle.clone(),
+            reach: shapes.iter().map(|s| s.length).collect(),
+            shapes,
+            roots: sampling.roots,
+            neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
+            adjust_params: AdjustParams::from_config(config),
+            mode: config.mode,
+            gamma: config.gamma,
+            lambda: config.lambda,
+            theta_s: config.theta_s,
+            recompute_neighbourhoods: config.recompute_neighbourhoods,
+        };
+        let sampling_report = SamplingReport {
+            roots: dressing.len(),
+            spacing: sampling.spacing,
+            relative_radius: sampling.metrics.relative_radius,
+            coverage_gap: sampling.metrics.coverage_gap,
+            alignment: sampling.metrics.alignment,
+            seconds: sampling.seconds,
+        };
+        let mut system = Self {
             config: config.clone(),
+            pool,
             mesh: welded,
-            frames_stepped: 0,
+            dressing,
+            sampling: sampling_report,
+            coat: Coat::default(),
+            records: Vec::new(),
+            triangles: Vec::new(),
+            work: Workspace::default(),
+            step_work: StepWorkspace::default(),
+            frame_positions: Vec::new(),
             #[cfg(feature = "test-hooks")]
             test_panic: Default::default(),
-        })
+        };
+        let rest = system.mesh.positions.clone();
+        let Self { pool, dressing, coat, work, .. } = &mut system;
+        pool.install(|| coat.solve(dressing, &rest, work, progress))?;
+        system.export();
+        Ok(system)
     }
 
     /// Test builds only: the next step, evaluate or validate panics.
@@ -57,9 +135,14 @@ impl System {
         &self.config
     }
 
-    /// The welded mesh at the current pose.
+    /// The welded mesh (rest pose).
     pub fn mesh(&self) -> &WeldedMesh {
         &self.mesh
+    }
+
+    /// Welded vertex positions of the current pose.
+    pub fn current_positions(&self) -> &[Vec3] {
+        &self.coat.positions
     }
 
     /// Number of vertices every frame must provide (the caller's numbering).
@@ -67,49 +150,84 @@ impl System {
         self.mesh.caller_vertex_count()
     }
 
-    /// Frames stepped since creation.
+    /// Frames stepped since creation (evaluate does not count).
     pub fn frames_stepped(&self) -> u64 {
-        self.frames_stepped
+        self.coat.frame_index
+    }
+
+    /// Number of worker threads of the system's pool.
+    pub fn threads(&self) -> usize {
+        self.pool.threads()
     }
 
     /// Number of feathers.
     pub fn feather_count(&self) -> usize {
-        self.feathers().len()
+        self.records.len()
     }
 
     /// The feathers at the current pose, in a stable order (by root).
     pub fn feathers(&self) -> &[FeatherRecord] {
-        &[]
+        &self.records
     }
 
     /// Each feather's two triangles (one per vane), world space, in the
     /// order of [`System::feathers`].
     pub fn feather_triangles(&self) -> &[[[f32; 3]; 6]] {
-        &[]
+        &self.triangles
     }
 
-    /// Sampling figures, once roots have been planted.
+    /// Sampling figures of the roots.
     pub fn sampling_report(&self) -> Option<SamplingReport> {
-        None
+        Some(self.sampling)
     }
 
-    /// Ordering figures, once the static order exists.
+    /// Figures of the static order built by create, evaluate or a rebuild frame.
     pub fn ordering_report(&self) -> Option<OrderingReport> {
-        None
+        Some(self.coat.ordering_report)
     }
 
-    /// What the last create, step or evaluate did, once feathers are adjusted.
+    /// What the last create, step or evaluate did.
     pub fn frame_report(&self) -> Option<FrameReport> {
-        None
+        Some(self.coat.frame_report)
     }
 
-    /// Exact validation of the current feathers, once feathers exist.
+    /// Exact validation of the current feathers (DESIGN.md §6).
     pub fn validate(&self) -> Option<ValidationReport> {
         self.maybe_test_panic();
-        None
+        let n = self.dressing.len();
+        let probes = (COVERAGE_PROBES_PER_FEATHER * n).clamp(COVERAGE_PROBES_MIN, COVERAGE_PROBES_MAX);
+        let tris: Vec<[[Vec3; 3]; 2]> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let v = t.map(Vec3::from_array);
+                [[v[0], v[1], v[2]], [v[3], v[4], v[5]]]
+            })
+            .collect();
+        let c = &self.coat;
+        let v = self.pool.install(|| {
+            validate(
+                &tris,
+                &c.frames,
+                &self.dressing.shapes,
+                &c.poses,
+                &c.body,
+                &c.positions,
+                &self.dressing.triangles,
+                probes,
+                self.config.seed,
+            )
+        });
+        Some(ValidationReport {
+            intersecting_pairs: v.intersecting_pairs.len(),
+            body_penetrations: v.body_penetrations.len(),
+            coverage: v.coverage,
+            mean_pitch_deg: v.mean_pitch_deg,
+        })
     }
 
-    /// Advances to the next animation frame. On error nothing changes.
+    /// Advances to the next animation frame by the system's mode. On error
+    /// nothing changes.
     pub fn step(&mut self, positions: &[f32]) -> Result<()> {
         self.step_with_progress(positions, &Progress::none())
     }
@@ -118,13 +236,20 @@ impl System {
     pub fn step_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
         self.maybe_test_panic();
         check_frame_positions(positions, self.vertex_count())?;
-        progress.check(Phase::Preparing, 0.0)?;
-        self.mesh.set_caller_positions(positions);
-        self.frames_stepped += 1;
-        Ok(())
+        let rebuild = self.dressing.mode == Mode::Rebuild;
+        self.transaction(positions, progress, |s, p| {
+            let Self { pool, dressing, coat, work, step_work, frame_positions, .. } = s;
+            if rebuild {
+                coat.frame_index += 1;
+                pool.install(|| coat.solve(dressing, frame_positions, work, p))
+            } else {
+                pool.install(|| step_coat(coat, dressing, frame_positions, work, step_work, p))
+            }
+        })
     }
 
-    /// Solves the pose from scratch, independent of history. On error nothing changes.
+    /// Solves the pose from scratch, independent of history (the frame count
+    /// is kept). On error nothing changes.
     pub fn evaluate(&mut self, positions: &[f32]) -> Result<()> {
         self.evaluate_with_progress(positions, &Progress::none())
     }
@@ -133,8 +258,36 @@ impl System {
     pub fn evaluate_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
         self.maybe_test_panic();
         check_frame_positions(positions, self.vertex_count())?;
-        progress.check(Phase::Preparing, 0.0)?;
-        self.mesh.set_caller_positions(positions);
-        Ok(())
+        self.transaction(positions, progress, |s, p| {
+            let Self { pool, dressing, coat, work, frame_positions, .. } = s;
+            pool.install(|| coat.solve(dressing, frame_positions, work, p))
+        })
+    }
+
+    /// Runs `update` on the welded `positions`; when it fails (it can only
+    /// be interrupted) the coat is restored to what it was.
+    fn transaction(
+        &mut self,
+        positions: &[f32],
+        progress: &Progress,
+        update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
+    ) -> Result<()> {
+        self.mesh.welded_positions_into(positions, &mut self.frame_positions);
+        let backup = progress.is_interruptible().then(|| self.coat.clone());
+        let result = update(self, progress);
+        match result {
+            Ok(()) => self.export(),
+            Err(_) => {
+                if let Some(b) = backup {
+                    self.coat = b;
+                }
+            }
+        }
+        result
+    }
+
+    fn export(&mut self) {
+        let Self { coat, dressing, records, triangles, .. } = self;
+        coat.export(dressing, records, triangles);
     }
 }

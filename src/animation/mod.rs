@@ -1,3 +1,4 @@
 //! Animation (paper §3.3, DESIGN.md §5): what changed between two frames.
 
 pub mod affine;
+pub mod step;

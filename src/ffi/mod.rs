@@ -100,10 +100,10 @@ pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
     if sys.is_null() {
         return;
     }
-    let _ = std::panic::catch_unwind(|| {
+    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         // SAFETY: from plumage_system_create, not yet destroyed (contract).
         drop(unsafe { Box::from_raw(sys) });
-    });
+    }));
 }
 
 /// Advances the animation by one frame: `positions` holds xyz for each of
@@ -243,6 +243,7 @@ pub unsafe extern "C" fn plumage_system_ordering_stats(
             edges: r.edges as u32,
             dropped_edges: r.dropped_edges as u32,
             violations: r.violations as u32,
+            reserved: 0,
             seconds: r.seconds,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
@@ -320,14 +321,14 @@ pub unsafe extern "C" fn plumage_system_last_error(
     buf: *mut c_char,
     capacity: usize,
 ) -> usize {
-    let message = std::panic::catch_unwind(|| {
+    let message = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         if sys.is_null() {
             thread_error()
         } else {
             // SAFETY: live handle (contract); reading the error is allowed even when poisoned.
             unsafe { &*sys }.last_error()
         }
-    })
+    }))
     .unwrap_or_default();
     let bytes = message.as_bytes_with_nul();
     if !buf.is_null() && capacity > 0 {

@@ -370,6 +370,8 @@ pub struct PlumageFeather {
     pub width: f32,
     /// Thickness.
     pub thickness: f32,
+    /// Always 0 (keeps the struct free of padding bytes).
+    pub reserved: u32,
 }
 
 impl From<&crate::stats::FeatherRecord> for PlumageFeather {
@@ -387,6 +389,7 @@ impl From<&crate::stats::FeatherRecord> for PlumageFeather {
             length: f.length,
             width: f.width,
             thickness: f.thickness,
+            reserved: 0,
         }
     }
 }
@@ -427,6 +430,8 @@ pub struct PlumageOrderingStats {
     pub dropped_edges: u32,
     /// Edges whose head comes after their tail in the order (0 when correct).
     pub violations: u32,
+    /// Always 0 (keeps the struct free of padding bytes).
+    pub reserved: u32,
     /// Wall time of neighbourhoods, priorities and ordering.
     pub seconds: f64,
 }
@@ -484,3 +489,14 @@ pub struct PlumageValidation {
     /// Mean pitch of the feathers, degrees.
     pub mean_pitch_deg: f64,
 }
+
+// Every struct the library copies out must be free of padding, so that the
+// bytes a host sees are fully defined (and comparable with memcmp).
+const _: () = {
+    use std::mem::size_of;
+    assert!(size_of::<PlumageFeather>() == 8 + 4 + 4 + 4 * 3 * 4 + 4 * 5 + 4);
+    assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
+    assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 12);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 4);
+};

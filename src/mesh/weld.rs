@@ -38,13 +38,14 @@ impl WeldedMesh {
         self.caller_to_welded.len()
     }
 
-    /// Takes a frame's positions (caller numbering, already checked) into
-    /// the welded vertices.
-    pub fn set_caller_positions(&mut self, caller_positions: &[f32]) {
-        for (p, &src) in self.positions.iter_mut().zip(&self.representative) {
+    /// A frame's positions (caller numbering, already checked) carried to
+    /// the welded vertices, into `out` (no allocation once it has grown).
+    pub fn welded_positions_into(&self, caller_positions: &[f32], out: &mut Vec<Vec3>) {
+        out.clear();
+        out.extend(self.representative.iter().map(|&src| {
             let s = src as usize * 3;
-            *p = Vec3::new(caller_positions[s], caller_positions[s + 1], caller_positions[s + 2]);
-        }
+            Vec3::new(caller_positions[s], caller_positions[s + 1], caller_positions[s + 2])
+        }));
     }
 
     /// A per-vertex attribute of the caller (`stride` floats per vertex)

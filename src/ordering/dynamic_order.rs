@@ -235,6 +235,11 @@ impl PriorityOrder {
         &self.order
     }
 
+    /// Every root's position in [`order`](Self::order) (`order()[ranks()[v]] == v`).
+    pub fn ranks(&self) -> &[u32] {
+        &self.rank
+    }
+
     /// Position of `node` in [`order`](Self::order).
     pub fn rank_of(&self, node: u32) -> u32 {
         self.rank[node as usize]

@@ -1,0 +1,238 @@
+//! The coat: every feather at one pose, and the from-scratch solve that
+//! builds it (neighbourhoods → priorities → static order → adjustment of
+//! every feather). Creation, `evaluate`, and every frame of the `rebuild`
+//! mode use it; the incremental and legacy frame updates live in
+//! `animation::step` and change a coat in place.
+
+use crate::adjustment::{AdjustParams, AdjustSteps, Adjuster, CandidateLists, Selection};
+use crate::body::BodyIndex;
+use crate::error::Result;
+use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_direction};
+use crate::geometry::RootFrame;
+use crate::ordering::{NeighbourParams, Neighbourhoods, Priorities, PriorityOrder};
+use crate::progress::{Phase, Progress};
+use crate::roots::{RootBinding, pose_roots};
+use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
+use crate::surface::Surface;
+use crate::{Config, Mode};
+use glam::Vec3;
+use std::time::Instant;
+
+/// What never changes after creation: the rest binding of every feather and
+/// the parameters derived from the configuration.
+#[derive(Clone, Debug)]
+pub struct Dressing {
+    /// Surface topology of the welded mesh.
+    pub surface: Surface,
+    /// Welded triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// For each welded triangle, the caller's triangle index.
+    pub source_triangle: Vec<u32>,
+    /// Where each feather is planted.
+    pub roots: Vec<RootBinding>,
+    /// Each feather's dimensions.
+    pub shapes: Vec<FeatherShape>,
+    /// Each feather's reach for obstacle search (its length).
+    pub reach: Vec<f32>,
+    /// Neighbourhood parameters.
+    pub neighbour_params: NeighbourParams,
+    /// Adjustment parameters.
+    pub adjust_params: AdjustParams,
+    /// The mode and priority weights.
+    pub mode: Mode,
+    /// γ of Eq. 3 / Eq. 2.
+    pub gamma: f32,
+    /// λ of Eq. 3.
+    pub lambda: f32,
+    /// θs, the propagation threshold.
+    pub theta_s: f32,
+    /// Recompute neighbourhoods at the current pose every frame.
+    pub recompute_neighbourhoods: bool,
+}
+
+impl Dressing {
+    /// Shapes from the configuration and each root's local spacing and
+    /// per-vertex multipliers: the global overrides of `config` when set,
+    /// otherwise the spacing rules of [`FeatherShape::for_spacing`]; length
+    /// and width then scale by the root's multipliers.
+    pub fn shapes_for(roots: &[RootBinding], config: &Config) -> Vec<FeatherShape> {
+        roots
+            .iter()
+            .map(|r| {
+                let mut s = FeatherShape::with_overrides(
+                    r.spacing,
+                    config.feather_length,
+                    config.feather_width,
+                    config.feather_thickness,
+                );
+                s.length *= r.length_scale;
+                s.width *= r.width_scale;
+                if config.feather_thickness <= 0.0 {
+                    s.thickness *= r.width_scale;
+                }
+                s
+            })
+            .collect()
+    }
+
+    /// Number of feathers.
+    pub fn len(&self) -> usize {
+        self.roots.len()
+    }
+
+    /// Whether there are no feathers.
+    pub fn is_empty(&self) -> bool {
+        self.roots.is_empty()
+    }
+}
+
+/// Every feather at the current pose, plus the order and neighbourhoods
+/// that produced it. This is the state a frame changes, and what a saved
+/// state holds.
+#[derive(Clone, Debug, Default)]
+pub struct Coat {
+    /// Welded vertex positions of the current pose.
+    pub positions: Vec<Vec3>,
+    /// Area-weighted vertex normals of the current pose.
+    pub normals: Vec<Vec3>,
+    /// Each root's frame at the current pose.
+    pub frames: Vec<RootFrame>,
+    /// Each feather's pitch and roll relative to its frame.
+    pub poses: Vec<FeatherPose>,
+    /// Neighbourhoods (k nearest, pairs, obstacle candidates).
+    pub neighbourhoods: Neighbourhoods,
+    /// The priority DAG and its order.
+    pub order: PriorityOrder,
+    /// The body's triangles at the current pose, indexed.
+    pub body: BodyIndex,
+    /// 0 after creation, then one more per step.
+    pub frame_index: u64,
+    /// Figures of the last static order.
+    pub ordering_report: OrderingReport,
+    /// Figures of the last create, step or evaluate.
+    pub frame_report: FrameReport,
+}
+
+/// Buffers reused from call to call; never part of the state.
+#[derive(Debug, Default)]
+pub struct Workspace {
+    /// The adjuster's own scratch.
+    pub adjuster: Adjuster,
+    /// ΔP of each pair.
+    pub deltas: Vec<f32>,
+    /// Shaft directions (the legacy rule's `o_i`).
+    pub orientations: Vec<Vec3>,
+}
+
+impl Coat {
+    /// Moves the coat to `positions` (welded) and re-poses every root.
+    pub fn pose(&mut self, dressing: &Dressing, positions: &[Vec3]) {
+        self.positions.clear();
+        self.positions.extend_from_slice(positions);
+        dressing.surface.vertex_normals(&self.positions, &mut self.normals);
+        pose_roots(&dressing.roots, &self.positions, &dressing.triangles, &self.normals, &mut self.frames);
+    }
+
+    /// Solves the coat from scratch at `positions`: neighbourhoods, the
+    /// static order (Eq. 3, or Eq. 2 for the legacy mode) and the full
+    /// three-step adjustment of every feather from a flat start.
+    pub fn solve(
+        &mut self,
+        dressing: &Dressing,
+        positions: &[Vec3],
+        work: &mut Workspace,
+        progress: &Progress,
+    ) -> Result<()> {
+        let start = Instant::now();
+        self.pose(dressing, positions);
+        progress.check(Phase::Ordering, 0.0)?;
+        let order_start = Instant::now();
+        self.neighbourhoods.rebuild(&self.frames, &dressing.reach, &dressing.neighbour_params);
+        progress.check(Phase::Ordering, 0.5)?;
+        self.poses.clear();
+        self.poses.resize(dressing.len(), FeatherPose::default());
+        let pairs = self.neighbourhoods.pairs();
+        match dressing.mode {
+            Mode::Legacy => {
+                // Eq. 2 with the feathers' own orientations (flat: o = õ).
+                work.orientations.clear();
+                work.orientations.extend(self.frames.iter().zip(&self.poses).map(|(f, p)| shaft_direction(f, *p)));
+                Priorities::legacy(&self.frames, &work.orientations, dressing.gamma)
+                    .deltas_of_pairs(pairs, &mut work.deltas)
+            }
+            Mode::Incremental | Mode::Rebuild => Priorities::improved(&self.frames, dressing.gamma, dressing.lambda)
+                .deltas_of_pairs(pairs, &mut work.deltas),
+        }
+        let report = self.order.build_static(dressing.len(), pairs, &work.deltas);
+        self.ordering_report = OrderingReport {
+            pairs: report.pairs,
+            edges: report.edges,
+            dropped_edges: report.dropped,
+            violations: report.violations,
+            seconds: order_start.elapsed().as_secs_f64(),
+        };
+        progress.check(Phase::Adjusting, 0.0)?;
+        self.body.rebuild(&self.positions, &dressing.triangles);
+        let (offsets, indices) = self.neighbourhoods.obstacle_csr();
+        let stats = work.adjuster.adjust_in_order(
+            &self.frames,
+            &dressing.shapes,
+            &mut self.poses,
+            self.order.order(),
+            self.order.ranks(),
+            CandidateLists::new(offsets, indices),
+            &self.body,
+            &dressing.adjust_params,
+            AdjustSteps::Full,
+            Selection::All,
+        );
+        progress.check(Phase::Adjusting, 1.0)?;
+        self.frame_report = FrameReport {
+            frame_index: self.frame_index,
+            adjusted: stats.adjusted,
+            collision_tests: stats.collision_tests,
+            priority_changes: 0,
+            reversals: 0,
+            reversals_refused: 0,
+            cycles_broken: 0,
+            clamped: stats.clamped,
+            reorder_seconds: self.ordering_report.seconds,
+            adjust_seconds: stats.seconds,
+            step_seconds: start.elapsed().as_secs_f64(),
+        };
+        Ok(())
+    }
+
+    /// Fills the host-facing records and triangles of every feather.
+    pub fn export(&self, dressing: &Dressing, records: &mut Vec<FeatherRecord>, triangles: &mut Vec<[[f32; 3]; 6]>) {
+        records.clear();
+        triangles.clear();
+        for (i, ((root, frame), (pose, shape))) in
+            dressing.roots.iter().zip(&self.frames).zip(self.poses.iter().zip(&dressing.shapes)).enumerate()
+        {
+            let tris = feather_triangles(frame, shape, *pose);
+            triangles.push([
+                tris[0][0].to_array(),
+                tris[0][1].to_array(),
+                tris[0][2].to_array(),
+                tris[1][0].to_array(),
+                tris[1][1].to_array(),
+                tris[1][2].to_array(),
+            ]);
+            records.push(FeatherRecord {
+                id: root.id,
+                order_index: self.order.rank_of(i as u32),
+                triangle: dressing.source_triangle[root.point.face as usize],
+                barycentric: root.point.bary,
+                root: frame.position.to_array(),
+                normal: frame.normal.to_array(),
+                direction: shaft_direction(frame, *pose).to_array(),
+                pitch: pose.pitch,
+                roll: pose.roll,
+                length: shape.length,
+                width: shape.width,
+                thickness: shape.thickness,
+            });
+        }
+    }
+}
