@@ -190,6 +190,8 @@ impl Coat {
         self.frame_report = FrameReport {
             frame_index: self.frame_index,
             adjusted: stats.adjusted,
+            deformed: 0,
+            seeds: dressing.len(),
             collision_tests: stats.collision_tests,
             priority_changes: 0,
             reversals: 0,
