@@ -28,6 +28,7 @@ import json
 import math
 import os
 import platform
+import resource
 import subprocess
 import sys
 import time
@@ -99,15 +100,22 @@ class Runner:
         cmd = [self.host] + ([model_path] if model_path else []) + list(args) + ["--fps", f"{self.fps:g}", "--report", report_path]
         shown = " ".join(cmd)
         log(f"  $ {shown}")
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         start = time.monotonic()
         proc = subprocess.run(cmd, capture_output=True, text=True)
         took = time.monotonic() - start
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
         if proc.returncode != 0:
             log(f"    FAILED (exit {proc.returncode}) after {took:.1f} s: {proc.stderr.strip().splitlines()[-1:] or ''}")
             return None, shown
-        log(f"    {took:.1f} s")
+        log(f"    {took:.1f} s wall, {cpu:.1f} s CPU")
         with open(report_path) as f:
-            return json.load(f), shown
+            report = json.load(f)
+        # How much CPU the whole host process got: on a loaded machine a
+        # one-thread run gets less than one core (cpu / wall < 1).
+        report["bench_process"] = {"wall_seconds": took, "cpu_seconds": cpu}
+        return report, shown
 
 
 def clip_frames(runner, model_path, label, fps):
@@ -136,6 +144,9 @@ def summarise(report):
         "ordering_seconds": report.get("ordering", {}).get("seconds"),
         "static_adjust_seconds": report.get("static", {}).get("seconds"),
         "create_seconds": report["timing"].get("create_seconds"),
+        "process_wall_seconds": report["bench_process"]["wall_seconds"],
+        "process_cpu_seconds": report["bench_process"]["cpu_seconds"],
+        "process_cpu_over_wall": report["bench_process"]["cpu_seconds"] / report["bench_process"]["wall_seconds"],
     }
     parts = [s["sampling_seconds"], s["ordering_seconds"], s["static_adjust_seconds"]]
     s["setup_seconds"] = sum(parts) if all(p is not None for p in parts) else None
@@ -252,7 +263,7 @@ def section_table(opt, runner, out):
     header = [
         "model", "mode", "feathers", "frames", "adjusted / frame", "collision tests / feather", "priority changes / frame",
         "% of adjusted", "% of all", "reorder ms", "adjust ms", "frame ms", "reorder % of frame",
-        "adjust µs / adjusted", "frame µs / adjusted", "inc / legacy", "inc / rebuild",
+        "adjust µs / adjusted", "frame µs / adjusted", "inc / legacy", "inc / rebuild", "CPU / wall",
     ]
     body = []
     for s in rows:
@@ -264,6 +275,7 @@ def section_table(opt, runner, out):
             fmt(s.get("adjust_us_per_adjusted")), fmt(s.get("frame_us_per_adjusted")),
             fmt(s.get("frame_ratio_incremental_over_legacy"), 2) if s["mode"] == "incremental" else "",
             fmt(s.get("frame_ratio_incremental_over_rebuild"), 2) if s["mode"] == "incremental" else "",
+            fmt(s.get("process_cpu_over_wall"), 2),
         ])
     text = [
         f"### Table 1: about {opt.feathers} feathers, {opt.table_threads} thread(s), validation off",
@@ -274,7 +286,9 @@ def section_table(opt, runner, out):
         "all of them but frame 0 (rest pose to the clip's first pose). reorder ms is the library's reorder_seconds (re-posing "
         "the roots, R_k, neighbourhoods and the order update); adjust ms its adjust_seconds; frame ms the host's wall time of "
         "plumage_system_step. Priority changes are neighbour pairs whose ΔP changed sign, as a percentage of the adjusted "
-        "feathers (the paper's definition) and of all feathers. Ratios are of mean frame time, measured in this run.",
+        "feathers (the paper's definition) and of all feathers. Ratios are of mean frame time, measured in this run. "
+        "CPU / wall: CPU seconds over wall seconds of the whole host process; below 1 on one thread means the run "
+        "waited for a core (the machine was busy) and its times are inflated.",
     ]
     if missing:
         text += ["", "Skipped (not found in " + opt.data + "): " + ", ".join(missing)]
@@ -300,13 +314,13 @@ def section_scaling(opt, runner, out):
         "frame_ms": fit_exponent(xs, [s.get("frame_ms") for s in rows]),
         "adjusted_per_frame": fit_exponent(xs, [s.get("adjusted_per_frame") for s in rows]),
     }
-    header = ["feathers", "sampling s", "ordering s", "static adjust s", "setup s", "create s (host)", "adjusted / frame", "frame ms", "adjust µs / adjusted"]
+    header = ["feathers", "sampling s", "ordering s", "static adjust s", "setup s", "create s (host)", "adjusted / frame", "frame ms", "adjust µs / adjusted", "CPU / wall"]
     body = [[
         fmt(s["feathers"]), fmt(s.get("sampling_seconds"), 3), fmt(s.get("ordering_seconds"), 3), fmt(s.get("static_adjust_seconds"), 3),
         fmt(s.get("setup_seconds"), 3), fmt(s.get("create_seconds"), 3), fmt(s.get("adjusted_per_frame")), fmt(s.get("frame_ms")),
-        fmt(s.get("adjust_us_per_adjusted")),
+        fmt(s.get("adjust_us_per_adjusted")), fmt(s.get("process_cpu_over_wall"), 2),
     ] for s in rows]
-    body.append(["**exponent**", "", "", "", fmt(exps["setup_seconds"], 2), fmt(exps["create_seconds"], 2), fmt(exps["adjusted_per_frame"], 2), fmt(exps["frame_ms"], 2), ""])
+    body.append(["**exponent**", "", "", "", fmt(exps["setup_seconds"], 2), fmt(exps["create_seconds"], 2), fmt(exps["adjusted_per_frame"], 2), fmt(exps["frame_ms"], 2), "", ""])
     text = [
         f"### Scaling: built-in model, incremental, {opt.table_threads} thread(s), {opt.scaling_frames} frames, validation off",
         "",
@@ -345,11 +359,12 @@ def section_threads(opt, runner, out):
             "adjust_speedup": per[1]["adjust_ms"] / per[2]["adjust_ms"] if per[1].get("adjust_ms") and per[2].get("adjust_ms") else None,
             "create_speedup": per[1]["create_seconds"] / per[2]["create_seconds"] if per[1].get("create_seconds") and per[2].get("create_seconds") else None,
         })
-    header = ["feathers", "frame ms, 1 thread", "frame ms, 2 threads", "frame speed-up", "adjust speed-up", "create s, 1 / 2 threads", "create speed-up", ".glb byte-identical"]
+    header = ["feathers", "frame ms, 1 thread", "frame ms, 2 threads", "frame speed-up", "adjust speed-up", "create s, 1 / 2 threads", "create speed-up", "CPU / wall, 1 / 2 threads", ".glb byte-identical"]
     body = [[
         fmt(r["feathers"]), fmt(r["one_thread"].get("frame_ms")), fmt(r["two_threads"].get("frame_ms")), fmt(r["frame_speedup"], 2),
         fmt(r["adjust_speedup"], 2), f'{fmt(r["one_thread"].get("create_seconds"), 2)} / {fmt(r["two_threads"].get("create_seconds"), 2)}',
-        fmt(r["create_speedup"], 2), "yes" if r["glb_identical"] else "**NO**",
+        fmt(r["create_speedup"], 2), f'{fmt(r["one_thread"].get("process_cpu_over_wall"), 2)} / {fmt(r["two_threads"].get("process_cpu_over_wall"), 2)}',
+        "yes" if r["glb_identical"] else "**NO**",
     ] for r in rows]
     text = [
         f"### Threads: built-in model, incremental, {opt.scaling_frames} frames, validation off",

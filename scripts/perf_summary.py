@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+"""Summarises `perf script --no-inline -F tid,ip,sym` output (samples with
+call stacks, leaf first) as Markdown: where a frame's time goes by phase
+(inclusive), and the top functions by self time.
+
+    perf script -i perf.data --no-inline -F tid,ip,sym | python3 scripts/perf_summary.py
+
+Phases are matched on whole symbol names (the library is built with line
+tables, not frame pointers, so record with --call-graph dwarf). Inlined
+functions count towards the function they were inlined into.
+"""
+
+import collections
+import sys
+
+# (label, symbol) in the order they are shown; a sample counts for every
+# phase whose symbol is on its stack.
+PHASES = [
+    ("create: sampling (sample_roots)", "plumage::sampling::sample_roots"),
+    ("create + rebuild frames: Coat::solve", "plumage::coat::Coat::solve"),
+    ("frames: step_coat (incremental, legacy)", "plumage::animation::step::step_coat"),
+    ("  pose_roots", "plumage::roots::pose_roots"),
+    ("  face maps + R_k (deform_differently)", "plumage::animation::affine::deform_differently"),
+    ("  Neighbourhoods::rebuild", "plumage::ordering::neighbours::Neighbourhoods::rebuild"),
+    ("  PriorityOrder::update_frame", "plumage::ordering::dynamic_order::PriorityOrder::update_frame"),
+    ("  PriorityOrder::build_static", "plumage::ordering::static_order::<impl plumage::ordering::dynamic_order::PriorityOrder>::build_static"),
+    ("  BodyIndex::rebuild", "plumage::body::BodyIndex::rebuild"),
+    ("  Adjuster::adjust_in_order", "plumage::adjustment::levels::Adjuster::adjust_in_order"),
+    ("    adjust_feather", "plumage::adjustment::steps::adjust_feather"),
+    ("      HeightField::rasterise", "plumage::adjustment::height_field::HeightField::rasterise"),
+    ("      BodyIndex / TriangleGrid::query_box", "plumage::body::TriangleGrid::query_box"),
+    ("      min_pitch_slope (steps 1, 3)", "plumage::adjustment::steps::<impl plumage::adjustment::height_field::HeightField>::min_pitch_slope"),
+    ("      settling_lateral_slope (step 2)", "plumage::adjustment::steps::<impl plumage::adjustment::height_field::HeightField>::settling_lateral_slope"),
+    ("      combine_heights", "plumage::adjustment::steps::<impl plumage::adjustment::height_field::HeightField>::combine_heights"),
+    ("Coat::export", "plumage::coat::Coat::export"),
+    ("host: ProceduralBody::pose_at", "plumage_host::ProceduralBody::pose_at"),
+]
+
+
+def read_samples(stream):
+    samples, cur = [], None
+    for line in stream:
+        if not line.strip():
+            continue
+        if not line.startswith("\t") and not line.startswith(" "):
+            cur = []
+            samples.append(cur)
+        elif cur is not None:
+            parts = line.strip().split(None, 1)
+            cur.append(parts[1] if len(parts) > 1 else "[unknown]")
+    return [s for s in samples if s]
+
+
+def indent(label):
+    """Leading pairs of spaces become nesting marks (Markdown drops spaces)."""
+    depth = (len(label) - len(label.lstrip(" "))) // 2
+    return "· " * depth + label.strip()
+
+
+def short(sym, width=100):
+    return sym if len(sym) <= width else sym[: width - 1] + "…"
+
+
+def main():
+    samples = read_samples(sys.stdin)
+    n = len(samples)
+    if n == 0:
+        sys.exit("perf_summary.py: no samples on stdin")
+    print(f"{n} samples\n")
+    print("| phase (inclusive) | % of samples |")
+    print("|---|---:|")
+    for label, sym in PHASES:
+        k = sum(1 for s in samples if sym in s)
+        if k:
+            print(f"| {indent(label)} | {100.0 * k / n:.1f} |")
+    print()
+    self_time = collections.Counter(s[0] for s in samples)
+    print("| function (self time) | % of samples |")
+    print("|---|---:|")
+    for sym, k in self_time.most_common(15):
+        print(f"| `{short(sym)}` | {100.0 * k / n:.1f} |")
+
+
+if __name__ == "__main__":
+    main()
