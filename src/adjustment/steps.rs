@@ -440,12 +440,7 @@ impl HeightField {
                 }
             }
         }
-        let level = p1.max(self.collect_roll_lines(p1));
-        // Only lines that can rise above the level between 0 and q_bal matter.
-        self.roll_lines.retain(|l| {
-            let c = if positive { l.c_pos + corner } else { l.c_neg - corner };
-            l.a + (c * q_bal).max(0.0) > level
-        });
+        let level = p1.max(self.collect_roll_lines(p1, q_bal, corner));
         let q = self.toward_within_level(q_bal, level, corner);
         let q = if q.abs() < MIN_LATERAL_SLOPE { 0.0 } else { q };
         // Within the level, f(q) ≤ level − corner·|q|: the pitch estimate.
@@ -453,16 +448,19 @@ impl HeightField {
         (q, p, q.abs() >= q_lim * (1.0 - 1e-6))
     }
 
-    /// One [`RollLine`] per cell covered by the unrolled feather at slope
-    /// `p` (the step-1 pose), judged at the cell's worst corner. Returns the
-    /// envelope at `q = 0` (the largest `a`).
-    fn collect_roll_lines(&mut self, p: f32) -> f32 {
+    /// The [`RollLine`]s of the cells covered by the unrolled feather at
+    /// slope `p` (the step-1 pose), judged at each cell's worst corner,
+    /// keeping only those that can rise above `p` somewhere between 0 and
+    /// `q_bal` once the corner term is added (the others cannot limit the
+    /// roll). Returns the envelope at `q = 0` over all of them.
+    fn collect_roll_lines(&mut self, p: f32, q_bal: f32, corner: f32) -> f32 {
         self.roll_lines.clear();
         let (half_dx, half_dy) = (0.5 * self.dx, 0.5 * self.dy);
         let half_width = 0.5 * self.shape.width;
         let rise = half_width / (self.shape.vane_split * self.shape.length);
         let sec = (1.0 + p * p).sqrt();
         let mx = half_dx * sec;
+        let positive = q_bal > 0.0;
         let mut f0 = f32::NEG_INFINITY;
         for j in 0..self.v {
             let y = self.row_y[j];
@@ -487,7 +485,10 @@ impl HeightField {
                 let inv = if h > 0.0 { self.inv_near[i] } else { self.inv_far[i] };
                 let line = RollLine { a: h * inv, c_pos: -y_lo * inv, c_neg: -y_hi * inv };
                 f0 = f0.max(line.a);
-                self.roll_lines.push(line);
+                let c = if positive { line.c_pos + corner } else { line.c_neg - corner };
+                if line.a + (c * q_bal).max(0.0) > p {
+                    self.roll_lines.push(line);
+                }
             }
         }
         f0
