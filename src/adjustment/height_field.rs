@@ -95,21 +95,8 @@ pub struct HeightField {
     pub(crate) first_col: usize,
     /// Per-row shaft interval covered by the kite (scratch of the steps).
     pub(crate) row_span: Vec<[f32; 2]>,
-    /// Per-cell pitch constraints as functions of the roll (scratch of step 2).
-    pub(crate) roll_lines: Vec<RollLine>,
     /// Body triangle ids of the last query.
     pub(crate) body_ids: Vec<u32>,
-}
-
-/// The pitch a covered cell demands as a function of the lateral slope `q`
-/// of the rolled feather: `p ≥ a + c·q`, with `c = c_pos` for `q ≥ 0` and
-/// `c_neg` for `q < 0` (the cell's lowest corner under the feather changes
-/// side with the sign of the roll, so each constraint is convex in `q`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct RollLine {
-    pub(crate) a: f32,
-    pub(crate) c_pos: f32,
-    pub(crate) c_neg: f32,
 }
 
 impl HeightField {
@@ -136,7 +123,6 @@ impl HeightField {
             inv_far: Vec::new(),
             first_col: 0,
             row_span: Vec::new(),
-            roll_lines: Vec::new(),
             body_ids: Vec::new(),
         };
         f.set_resolution(u, v);
@@ -169,7 +155,6 @@ impl HeightField {
         }
         self.row_y.resize(v, 0.0);
         self.row_span.resize(v, [0.0; 2]);
-        self.roll_lines.reserve(u * v);
     }
 
     /// Clears both layers to the floor and lays the grid over `shape`'s
@@ -298,7 +283,7 @@ impl HeightField {
     /// Rasterises one triangle given in local coordinates; its top is its
     /// plane raised by `raise`. Returns whether any cell was touched.
     pub(crate) fn rasterise(&mut self, layer: Layer, tri: [Vec3; 3], raise: f32) -> bool {
-        let z_top = tri[0].z.max(tri[1].z).max(tri[2].z);
+        let z_top = max3(tri[0].z, tri[1].z, tri[2].z);
         if z_top + raise <= self.floor || z_top.is_nan() {
             return false;
         }
@@ -306,7 +291,8 @@ impl HeightField {
         // Grid coordinates: cell (i, j) is the unit square [i, i+1] × [j, j+1].
         let grid = |p: Vec3| Vec2::new(p.x * inv_dx, (p.y - self.y_min) * inv_dy);
         let g = [grid(tri[0]), grid(tri[1]), grid(tri[2])];
-        let (gmin, gmax) = (g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]));
+        let gmin = Vec2::new(min3(g[0].x, g[1].x, g[2].x), min3(g[0].y, g[1].y, g[2].y));
+        let gmax = Vec2::new(max3(g[0].x, g[1].x, g[2].x), max3(g[0].y, g[1].y, g[2].y));
         let (u, v) = (self.u as f32, self.v as f32);
         let socket_u = self.socket_x * inv_dx;
         if !(gmax.x >= socket_u && gmin.x <= u && gmax.y >= 0.0 && gmin.y <= v) {
@@ -357,6 +343,21 @@ impl HeightField {
         }
         touched
     }
+}
+
+/// The largest of three values (plain comparisons; inputs are finite or
+/// the triangle is rejected by the NaN check on its top).
+#[inline(always)]
+fn max3(a: f32, b: f32, c: f32) -> f32 {
+    let m = if a > b { a } else { b };
+    if m > c { m } else { c }
+}
+
+/// The smallest of three values (see [`max3`]).
+#[inline(always)]
+fn min3(a: f32, b: f32, c: f32) -> f32 {
+    let m = if a < b { a } else { b };
+    if m < c { m } else { c }
 }
 
 /// A world triangle in the root frame's local coordinates.

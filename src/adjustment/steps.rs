@@ -27,7 +27,7 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{RollLine, ceil_i32, floor_i32};
+use super::height_field::{ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape};
@@ -42,8 +42,6 @@ const FREE_HEIGHT_CAP_PER_WIDTH: f32 = 0.5;
 /// Rolls whose lateral slope is below this (about 0.3°) are not worth a
 /// second pitch search: the feather stays unrolled.
 const MIN_LATERAL_SLOPE: f32 = 0.005;
-/// Newton iterations of step 2 (two to four are typical).
-const MAX_ROLL_CUTS: usize = 24;
 
 /// Adjusts one feather: rasterises its obstacles and the body near its root
 /// into `scratch`, then runs the chosen steps (see the module notes of
@@ -257,7 +255,7 @@ impl HeightField {
                 if i_full > i_hi {
                     continue;
                 }
-                let lateral = (q * (y - half_dy)).min(q * (y + half_dy));
+                let lateral = min_f(q * (y - half_dy), q * (y + half_dy));
                 let run = i_full..i_hi + 1;
                 let best = max_requirement(
                     &self.need[row + run.start..row + run.end],
@@ -300,12 +298,12 @@ impl HeightField {
     #[inline]
     fn clipped_requirement(&self, c: &CellContext, i: usize, cell: usize) -> Option<(f32, f32)> {
         let h = self.need[cell];
-        let reach = (self.col_far[i] * c.sec * c.rise_cb + c.shear_rise).min(c.half_width_cb);
-        let (y_lo, y_hi) = ((c.y - c.half_dy).max(-reach), (c.y + c.half_dy).min(reach));
+        let reach = min_f(self.col_far[i] * c.sec * c.rise_cb + c.shear_rise, c.half_width_cb);
+        let (y_lo, y_hi) = (max_f(c.y - c.half_dy, -reach), min_f(c.y + c.half_dy, reach));
         if y_lo > y_hi || h == EMPTY {
             return None;
         }
-        let lateral = (c.q * y_lo).min(c.q * y_hi);
+        let lateral = min_f(c.q * y_lo, c.q * y_hi);
         let n = h - lateral;
         Some((n * if n > 0.0 { self.inv_near[i] } else { self.inv_far[i] }, lateral))
     }
@@ -412,11 +410,12 @@ impl HeightField {
     /// edges where cell rounding binds) and the step mostly refines.
     ///
     /// The rolled feather needs pitch slope `f(q)` at lateral slope `q`
-    /// (the upper envelope of one convex constraint per covered cell); its
-    /// kite lies under the unrolled one iff its corners do:
-    /// `s·L·f(q) + W/2·|q| ≤ s·L·p1`. Both sides are convex in `q`, so the
-    /// allowed rolls form an interval around 0, and the volume-balancing
-    /// roll is clamped into it.
+    /// (the upper envelope of one constraint per covered cell, each linear
+    /// in `q` on either side of 0); its kite lies under the unrolled one iff
+    /// its corners do: `s·L·f(q) + W/2·|q| ≤ s·L·p1`. On the side of 0
+    /// where the volume-balancing roll lies every constraint is linear, so
+    /// the allowed rolls there form an interval `[0, q_max]` found in one
+    /// pass, and the balancing roll is clamped into it.
     ///
     /// Returns `(q, p, bound)`: the lateral slope, the pitch slope it needs
     /// (an upper estimate from the step-1 coverage, used only to turn `q`
@@ -440,28 +439,27 @@ impl HeightField {
                 }
             }
         }
-        let level = p1.max(self.collect_roll_lines(p1, q_bal, corner));
-        let q = self.toward_within_level(q_bal, level, corner);
+        let q = q_bal.signum() * self.roll_limit(p1, positive, corner).min(q_bal.abs());
         let q = if q.abs() < MIN_LATERAL_SLOPE { 0.0 } else { q };
-        // Within the level, f(q) ≤ level − corner·|q|: the pitch estimate.
-        let p = if q == 0.0 { p1 } else { level - corner * q.abs() };
+        // Within the limit, f(q) ≤ p1 − corner·|q|: the pitch estimate.
+        let p = p1 - corner * q.abs();
         (q, p, q.abs() >= q_lim * (1.0 - 1e-6))
     }
 
-    /// The [`RollLine`]s of the cells covered by the unrolled feather at
-    /// slope `p` (the step-1 pose), judged at each cell's worst corner,
-    /// keeping only those that can rise above `p` somewhere between 0 and
-    /// `q_bal` once the corner term is added (the others cannot limit the
-    /// roll). Returns the envelope at `q = 0` over all of them.
-    fn collect_roll_lines(&mut self, p: f32, q_bal: f32, corner: f32) -> f32 {
-        self.roll_lines.clear();
+    /// The largest `|q|` on the side of 0 given by `positive` at which the
+    /// rolled feather, re-pitched, still lies nowhere above the unrolled
+    /// one at slope `p`: each covered cell's constraint `a + c·q` plus the
+    /// corner term must stay within `p`. (A cell already above `p` at
+    /// `q = 0`, which step 1 should rule out up to rounding, forbids any
+    /// roll.)
+    fn roll_limit(&self, p: f32, positive: bool, corner: f32) -> f32 {
         let (half_dx, half_dy) = (0.5 * self.dx, 0.5 * self.dy);
         let half_width = 0.5 * self.shape.width;
         let rise = half_width / (self.shape.vane_split * self.shape.length);
         let sec = (1.0 + p * p).sqrt();
         let mx = half_dx * sec;
-        let positive = q_bal > 0.0;
-        let mut f0 = f32::NEG_INFINITY;
+        let slack = 1e-6 * (1.0 + p.abs());
+        let mut limit = f32::INFINITY;
         for j in 0..self.v {
             let y = self.row_y[j];
             let [xa, xb] = self.kite_interval(y.abs() - half_dy);
@@ -472,30 +470,30 @@ impl HeightField {
                 if h == EMPTY {
                     continue;
                 }
-                let reach = (self.col_far[i] * sec * rise).min(half_width);
-                let (y_lo, y_hi) = if reach >= y_out {
-                    (y - half_dy, y + half_dy)
-                } else {
-                    let clipped = ((y - half_dy).max(-reach), (y + half_dy).min(reach));
-                    if clipped.0 > clipped.1 {
-                        continue;
-                    }
-                    clipped
-                };
+                let reach = min_f(self.col_far[i] * sec * rise, half_width);
+                let (y_lo, y_hi) = (max_f(y - half_dy, -reach), min_f(y + half_dy, reach));
+                if reach < y_out && y_lo > y_hi {
+                    continue;
+                }
                 let inv = if h > 0.0 { self.inv_near[i] } else { self.inv_far[i] };
-                let line = RollLine { a: h * inv, c_pos: -y_lo * inv, c_neg: -y_hi * inv };
-                f0 = f0.max(line.a);
-                let c = if positive { line.c_pos + corner } else { line.c_neg - corner };
-                if line.a + (c * q_bal).max(0.0) > p {
-                    self.roll_lines.push(line);
+                let a = h * inv;
+                if a > p + slack {
+                    return 0.0;
+                }
+                // Growth of this cell's constraint per unit |q|.
+                let d = if positive { corner - y_lo * inv } else { corner + y_hi * inv };
+                if d > 0.0 {
+                    let q = max_f(p - a, 0.0) / d;
+                    limit = if q < limit { q } else { limit };
                 }
             }
         }
-        f0
+        limit
     }
 
-    /// The [`RollLine`] of cell (i, j) if the unrolled feather at slope `p`
-    /// covers it and it holds something.
+    /// The pitch constraint of cell (i, j) as a function of the lateral
+    /// slope, if the unrolled feather at slope `p` covers it and it holds
+    /// something.
     #[inline]
     fn roll_line(&self, i: usize, j: usize, p: f32) -> Option<RollLine> {
         let h = self.need[j * self.u + i];
@@ -513,53 +511,27 @@ impl HeightField {
         if xa > xb || x0 < xa - mx || x0 > xb + mx {
             return None;
         }
-        let reach = (self.col_far[i] * sec * rise).min(half_width);
-        let (y_lo, y_hi) = ((y - half_dy).max(-reach), (y + half_dy).min(reach));
+        let reach = min_f(self.col_far[i] * sec * rise, half_width);
+        let (y_lo, y_hi) = (max_f(y - half_dy, -reach), min_f(y + half_dy, reach));
         if y_lo > y_hi {
             return None;
         }
         let inv = if h > 0.0 { self.inv_near[i] } else { self.inv_far[i] };
         Some(RollLine { a: h * inv, c_pos: -y_lo * inv, c_neg: -y_hi * inv })
     }
+}
 
-    /// The envelope `f(q) + corner·|q|`, with the active line's slope and
-    /// intercept there. `positive` picks the branch at `q = 0`.
-    fn roll_envelope(&self, q: f32, positive: bool, corner: f32) -> (f32, f32, f32) {
-        let positive = if q == 0.0 { positive } else { q > 0.0 };
-        let extra = if positive { corner } else { -corner };
-        let mut best = (f32::NEG_INFINITY, 0.0, 0.0);
-        for l in &self.roll_lines {
-            let c = if positive { l.c_pos } else { l.c_neg } + extra;
-            let v = l.a + c * q;
-            if v > best.0 || (v == best.0 && (c > best.1) == positive) {
-                best = (v, c, l.a);
-            }
-        }
-        best
-    }
+/// The larger of two values (plain comparison: no NaN handling, which
+/// costs several instructions in these per-cell loops; inputs are finite).
+#[inline(always)]
+fn max_f(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
 
-    /// Moves from 0 (inside the level set of the convex envelope with
-    /// corner weight `corner`) towards `target` as far as it stays within
-    /// `level`: Newton steps from the target's side, which stay outside the
-    /// level set and approach its edge.
-    fn toward_within_level(&self, target: f32, level: f32, corner: f32) -> f32 {
-        let mut q = target;
-        for _ in 0..MAX_ROLL_CUTS {
-            let (f, s, a) = self.roll_envelope(q, target >= 0.0, corner);
-            if f <= level {
-                return q;
-            }
-            if s == 0.0 {
-                break;
-            }
-            let next = (level - a) / s;
-            if next * q < 0.0 || next.abs() >= q.abs() {
-                break;
-            }
-            q = next;
-        }
-        0.0
-    }
+/// The smaller of two values (see [`max_f`]).
+#[inline(always)]
+fn min_f(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
 }
 
 /// `need` of a cell with nothing in it: no pitch violates it.
@@ -593,6 +565,17 @@ fn max_requirement(need: &[f32], inv_near: &[f32], inv_far: &[f32], lateral: f32
         }
     }
     best
+}
+
+/// The pitch a covered cell demands as a function of the lateral slope `q`
+/// of the rolled feather: `p ≥ a + c·q`, with `c = c_pos` for `q ≥ 0` and
+/// `c_neg` for `q < 0` (the cell's lowest corner under the feather changes
+/// side with the sign of the roll).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RollLine {
+    a: f32,
+    c_pos: f32,
+    c_neg: f32,
 }
 
 /// The result of a minimal-pitch search.
