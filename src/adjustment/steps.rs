@@ -74,7 +74,7 @@ pub fn adjust_feather(
 }
 
 /// Runs the steps on a filled field. Returns the pose and whether a limit bound.
-pub fn choose_pose(
+pub(crate) fn choose_pose(
     field: &mut HeightField,
     previous: FeatherPose,
     params: &AdjustParams,
