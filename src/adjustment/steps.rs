@@ -74,7 +74,7 @@ pub fn adjust_feather(
 }
 
 /// Runs the steps on a filled field. Returns the pose and whether a limit bound.
-pub fn choose_pose(
+pub(crate) fn choose_pose(
     field: &mut HeightField,
     previous: FeatherPose,
     params: &AdjustParams,
@@ -244,12 +244,9 @@ impl HeightField {
                 let row = j * u;
                 let ctx = CellContext { p, q, k, xb, y, half_dy, sec, rise_cb, shear_rise, half_width_cb };
                 for i in i_lo..i_full.min(i_hi + 1) {
-                    if let Some(t) = self.clipped_cell_threshold(&ctx, i, row + i, need) {
+                    if let Some((t, p_req)) = self.clipped_cell_threshold(&ctx, i, row + i, need) {
                         need = t;
-                        need_cell = Some(Binding {
-                            cell: (row + i) as u32,
-                            clears: t >= self.cell_requirement(&ctx, i, row + i),
-                        });
+                        need_cell = Some(Binding { cell: (row + i) as u32, clears: t == p_req });
                     }
                 }
                 if i_full > i_hi {
@@ -308,20 +305,16 @@ impl HeightField {
         Some((n * if n > 0.0 { self.inv_near[i] } else { self.inv_far[i] }, lateral))
     }
 
+    /// The threshold of a clipped cell and its requirement, if the
+    /// threshold beats `need`.
     #[inline]
-    fn cell_requirement(&self, c: &CellContext, i: usize, cell: usize) -> f32 {
-        self.clipped_requirement(c, i, cell).map_or(f32::NEG_INFINITY, |r| r.0)
-    }
-
-    /// The threshold of a clipped cell if it beats `need`.
-    #[inline]
-    fn clipped_cell_threshold(&self, c: &CellContext, i: usize, cell: usize, need: f32) -> Option<f32> {
+    fn clipped_cell_threshold(&self, c: &CellContext, i: usize, cell: usize, need: f32) -> Option<(f32, f32)> {
         let (p_req, _) = self.clipped_requirement(c, i, cell)?;
         if p_req <= need {
             return None;
         }
         let t = cell_threshold(c.p, p_req, self.col_x[i], c.k, c.xb);
-        (t > need).then_some(t)
+        (t > need).then_some((t, p_req))
     }
 
     /// Height above the tangent plane of the higher vane corner at pitch
