@@ -12,7 +12,7 @@ use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::ordering::NeighbourParams;
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
-use crate::sampling::sample_roots;
+use crate::sampling::sample_roots_with_progress;
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
 use crate::validation::validate;
@@ -69,7 +69,7 @@ impl System {
             config,
         )?;
         progress.check(Phase::Sampling, 0.0)?;
-        let sampling = pool.install(|| sample_roots(&welded, &surface, &fields, config))?;
+        let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
         progress.check(Phase::Sampling, 1.0)?;
         let shapes = Dressing::shapes_for(&sampling.roots, config);
         let dressing = Dressing {
