@@ -3,9 +3,13 @@
 call stacks, leaf first) as Markdown: where a frame's time goes by phase
 (inclusive), and the top functions by self time.
 
-    perf script -i perf.data --no-inline -F tid,ip,sym | python3 scripts/perf_summary.py
+    perf script -i perf.data --no-inline -F tid,ip,sym | python3 scripts/perf_summary.py [--within SYMBOL]
 
-Phases are matched on whole symbol names (the library is built with line
+With --within, only samples with SYMBOL on their stack are counted (e.g.
+plumage::animation::step::step_coat for the frames alone).
+
+Phases match symbols by prefix, so `sample_roots` also covers
+`sample_roots_with_progress` (the library is built with line
 tables, not frame pointers, so record with --call-graph dwarf). Inlined
 functions count towards the function they were inlined into.
 """
@@ -62,15 +66,23 @@ def short(sym, width=100):
 
 
 def main():
+    within = None
+    if len(sys.argv) == 3 and sys.argv[1] == "--within":
+        within = sys.argv[2]
+    elif len(sys.argv) != 1:
+        sys.exit("usage: perf_summary.py [--within SYMBOL] < perf-script-output")
     samples = read_samples(sys.stdin)
+    total = len(samples)
+    if within:
+        samples = [s for s in samples if any(f.startswith(within) for f in s)]
     n = len(samples)
     if n == 0:
-        sys.exit("perf_summary.py: no samples on stdin")
-    print(f"{n} samples\n")
+        sys.exit("perf_summary.py: no samples" + (f" with {within} on the stack" if within else " on stdin"))
+    print(f"{n} samples" + (f" of {total} (those within `{within}`)" if within else "") + "\n")
     print("| phase (inclusive) | % of samples |")
     print("|---|---:|")
     for label, sym in PHASES:
-        k = sum(1 for s in samples if sym in s)
+        k = sum(1 for s in samples if any(f.startswith(sym) for f in s))
         if k:
             print(f"| {indent(label)} | {100.0 * k / n:.1f} |")
     print()
