@@ -121,7 +121,7 @@ fn bench_walks(c: &mut Criterion, name: &str, shape: &Shape, short: f32, long: f
         .unwrap();
     let [p0, p1, p2] = triangles[face].map(|v| positions[v as usize]);
     let normal = (p1 - p0).cross(p2 - p0).normalize();
-    let direction = glam::Quat::from_axis_angle(normal, 0.5236) * (p1 - p0).normalize();
+    let direction = glam::Quat::from_axis_angle(normal, std::f32::consts::FRAC_PI_6) * (p1 - p0).normalize();
     let start = SurfacePoint { face: face as u32, bary: [1.0 / 3.0; 3] };
     for (label, distance) in [("step", short), ("long", long)] {
         let r = surface.walk(&positions, start, direction, distance);
@@ -144,7 +144,9 @@ fn walk(c: &mut Criterion) {
     if let Some(flamingo) = common::gltf_mesh::load_model("Flamingo.glb") {
         let (_, positions, triangles) = surface_of(&flamingo);
         let spacing = (area(&positions, &triangles) / ROOTS as f32).sqrt();
-        let (lo, hi) = positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let (lo, hi) = positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         bench_walks(c, "flamingo", &flamingo, spacing, 0.2 * (hi - lo).length());
     } else {
         eprintln!("walk/flamingo_*: skipped (Flamingo.glb not found)");
