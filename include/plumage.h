@@ -655,6 +655,10 @@ uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
  * Copies the feathers' triangles as xyz floats: two triangles (one per
  * vane) of three corners per feather, 18 floats per feather, in the order
  * of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
+ * Corner order per feather: (root, tip, left corner), (root, right corner,
+ * tip), where "left" lies on the binormal side (normal × shaft); both
+ * triangles face away from the skin, and the root and tip corners of the
+ * two triangles are bit-identical, so a host can share them.
  */
 uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
                                           float *xyz,

@@ -58,6 +58,8 @@ impl Aabb {
 pub struct TriangleGrid {
     corners: Vec<[Vec3; 3]>,
     boxes: Vec<Aabb>,
+    /// The cell holding each triangle box's lowest corner.
+    low_cells: Vec<[u16; 3]>,
     origin: Vec3,
     cell: f32,
     inv_cell: f32,
@@ -180,6 +182,11 @@ impl TriangleGrid {
     /// Counting sort of triangles into the cells their boxes touch.
     fn fill_cells(&mut self) {
         let ncell = self.dims.iter().product::<usize>();
+        self.low_cells.clear();
+        for k in 0..self.boxes.len() {
+            let lo = self.cell_of(self.boxes[k].min);
+            self.low_cells.push(lo.map(|c| c as u16));
+        }
         self.cell_start.clear();
         self.cell_start.resize(ncell + 1, 0);
         for b in &self.boxes {
@@ -244,13 +251,13 @@ impl TriangleGrid {
         self.dims.iter().product()
     }
 
-    /// Whether `cell` (linear index) is the first cell the two boxes share:
-    /// the per-axis maximum of their lowest cells. Used to report each
-    /// overlapping pair from exactly one cell.
+    /// The first cell (linear index) that the boxes of triangles `a` and
+    /// `b` share if they overlap: the per-axis maximum of their lowest
+    /// cells. Used to report each overlapping pair from exactly one cell.
     #[inline]
-    pub fn is_first_shared_cell(&self, cell: usize, a: &Aabb, b: &Aabb) -> bool {
-        let (la, lb) = (self.cell_of(a.min), self.cell_of(b.min));
-        self.cell_index([la[0].max(lb[0]), la[1].max(lb[1]), la[2].max(lb[2])]) == cell
+    pub fn first_shared_cell(&self, a: u32, b: u32) -> usize {
+        let (la, lb) = (self.low_cells[a as usize], self.low_cells[b as usize]);
+        self.cell_index([0, 1, 2].map(|k| la[k].max(lb[k]) as usize))
     }
 
     /// Appends to `out` (after clearing it) every triangle whose bounding
@@ -266,8 +273,14 @@ impl TriangleGrid {
                 for x in lo[0]..=hi[0] {
                     let c = self.cell_index([x, y, z]);
                     for &t in self.cell_items(c) {
-                        let b = &self.boxes[t as usize];
-                        if b.overlaps(query) && self.is_first_shared_cell(c, b, query) {
+                        // Report from the first cell shared with the query.
+                        let low = self.low_cells[t as usize];
+                        let first = [
+                            (low[0] as usize).max(lo[0]) == x,
+                            (low[1] as usize).max(lo[1]) == y,
+                            (low[2] as usize).max(lo[2]) == z,
+                        ];
+                        if first.iter().all(|&f| f) && self.boxes[t as usize].overlaps(query) {
                             out.push(t);
                         }
                     }

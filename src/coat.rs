@@ -192,6 +192,8 @@ impl Coat {
         self.frame_report = FrameReport {
             frame_index: self.frame_index,
             adjusted: stats.adjusted,
+            deformed: 0,
+            seeds: dressing.len(),
             collision_tests: stats.collision_tests,
             priority_changes: 0,
             reversals: 0,
@@ -246,7 +248,7 @@ impl Coat {
 /// Layout: frame index (u64); welded positions (u64 count, then xyz f32
 /// each); poses (u64 count, then pitch and roll f32 each); the ordering
 /// report (four u64 counts, seconds f64); the frame report (frame index and
-/// seven counts as u64, three timings f64); the neighbourhoods
+/// nine counts as u64, three timings f64); the neighbourhoods
 /// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]).
 impl Coat {
     /// Appends the coat's state to a state blob.
@@ -261,17 +263,31 @@ impl Coat {
             w.f32(pose.pitch);
             w.f32(pose.roll);
         }
-        let o = &self.ordering_report;
-        [o.pairs, o.edges, o.dropped_edges, o.violations].iter().for_each(|&c| w.u64(c as u64));
-        w.f64(o.seconds);
-        let f = &self.frame_report;
-        w.u64(f.frame_index);
-        w.u64(f.adjusted as u64);
-        w.u64(f.collision_tests);
-        [f.priority_changes, f.reversals, f.reversals_refused, f.cycles_broken, f.clamped]
-            .iter()
-            .for_each(|&c| w.u64(c as u64));
-        [f.reorder_seconds, f.adjust_seconds, f.step_seconds].iter().for_each(|&s| w.f64(s));
+        // Destructured in full (as in `read_state`) so that a new report
+        // field cannot be forgotten here.
+        let OrderingReport { pairs, edges, dropped_edges, violations, seconds } = self.ordering_report;
+        [pairs, edges, dropped_edges, violations].iter().for_each(|&c| w.u64(c as u64));
+        w.f64(seconds);
+        let FrameReport {
+            frame_index,
+            adjusted,
+            deformed,
+            seeds,
+            collision_tests,
+            priority_changes,
+            reversals,
+            reversals_refused,
+            cycles_broken,
+            clamped,
+            reorder_seconds,
+            adjust_seconds,
+            step_seconds,
+        } = self.frame_report;
+        w.u64(frame_index);
+        [adjusted, deformed, seeds].iter().for_each(|&c| w.u64(c as u64));
+        w.u64(collision_tests);
+        [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
+        [reorder_seconds, adjust_seconds, step_seconds].iter().for_each(|&s| w.f64(s));
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
     }
@@ -316,6 +332,8 @@ impl Coat {
         let frame_report = FrameReport {
             frame_index: r.u64()?,
             adjusted: count(r)?,
+            deformed: count(r)?,
+            seeds: count(r)?,
             collision_tests: r.u64()?,
             priority_changes: count(r)?,
             reversals: count(r)?,

@@ -40,6 +40,11 @@ pub struct FrameReport {
     pub frame_index: u64,
     /// Feathers re-adjusted in this call.
     pub adjusted: usize,
+    /// Roots that deformed differently from a neighbour (the paper's `R_k`).
+    pub deformed: usize,
+    /// Roots readjusted in any case (`R*_k`: `R_k` plus those the reordering
+    /// touched); the rest of `adjusted` came by propagation past θs.
+    pub seeds: usize,
     /// Obstacle feathers rasterised in this call.
     pub collision_tests: u64,
     /// Pairs whose priority difference changed sign.

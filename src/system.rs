@@ -179,6 +179,12 @@ impl System {
         &self.triangles
     }
 
+    /// Which feathers the last create, step or evaluate readjusted (one flag
+    /// per feather, in the order of [`System::feathers`]).
+    pub fn readjusted(&self) -> &[bool] {
+        self.work.adjuster.adjusted()
+    }
+
     /// Sampling figures of the roots.
     pub fn sampling_report(&self) -> Option<SamplingReport> {
         Some(self.sampling)

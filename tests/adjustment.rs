@@ -13,6 +13,49 @@ use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{Validation, coverage, intersecting_pairs, validate};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+/// Counts allocations per thread, to check that warm scratch never allocates.
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count_allocation() {
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+fn allocations_on_this_thread() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+// SAFETY: forwards every call to the system allocator unchanged.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        count_allocation();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        count_allocation();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        count_allocation();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 /// A feathered test scene: body mesh, roots, order and candidate lists.
 struct Scene {
@@ -610,4 +653,74 @@ fn fine_pitch_only_keeps_roll_and_stays_clean() {
     );
     assert_eq!(poses.iter().map(|p| p.roll).collect::<Vec<_>>(), rolls);
     assert_clean("fine pitch", &scene.validate(&poses, 100));
+}
+
+#[test]
+fn warm_scratch_allocates_nothing() {
+    let scene = sphere_scene(debug_or_release(200, 600), 1.0);
+    let params = AdjustParams::default();
+    let (poses, _) = scene.adjust(&params);
+    let mut field = HeightField::new(32, 16);
+    let obstacles_of = |i: usize| -> Vec<ObstacleFeather> {
+        scene
+            .lists()
+            .of(i)
+            .iter()
+            .map(|&j| j as usize)
+            .filter(|&j| scene.rank[j] < scene.rank[i])
+            .map(|j| ObstacleFeather {
+                triangles: feather_triangles(&scene.frames[j], &scene.shapes[j], poses[j]),
+                thickness: scene.shapes[j].thickness,
+            })
+            .collect()
+    };
+    let feathers: Vec<(usize, Vec<ObstacleFeather>)> =
+        scene.order.iter().map(|&i| (i as usize, obstacles_of(i as usize))).collect();
+    let run = |field: &mut HeightField| {
+        for (i, obstacles) in &feathers {
+            let steps = if i % 2 == 0 { AdjustSteps::Full } else { AdjustSteps::FinePitchOnly };
+            adjust_feather(
+                &scene.frames[*i],
+                &scene.shapes[*i],
+                poses[*i],
+                obstacles,
+                &scene.body,
+                &params,
+                steps,
+                field,
+            );
+        }
+    };
+    run(&mut field);
+    let before = allocations_on_this_thread();
+    run(&mut field);
+    assert_eq!(allocations_on_this_thread(), before, "adjust_feather allocated with warm scratch");
+
+    // Ordered adjustment: after the first frame, frames of the same size
+    // allocate nothing on the worker (a one-thread pool runs everything there).
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let counts: Vec<usize> = pool.install(|| {
+        let mut adjuster = Adjuster::new();
+        let mut poses = vec![FeatherPose::default(); scene.frames.len()];
+        (0..3)
+            .map(|_| {
+                let before = allocations_on_this_thread();
+                adjuster.adjust_in_order(
+                    &scene.frames,
+                    &scene.shapes,
+                    &mut poses,
+                    &scene.order,
+                    &scene.rank,
+                    scene.lists(),
+                    &scene.body,
+                    &params,
+                    AdjustSteps::Full,
+                    Selection::All,
+                );
+                allocations_on_this_thread() - before
+            })
+            .collect()
+    });
+    assert!(counts[0] > 0);
+    assert_eq!(&counts[1..], &[0, 0], "allocations per call: {counts:?}");
 }

@@ -42,6 +42,9 @@ const BODY_FACING_MIN: f32 = -0.3;
 /// A projected triangle is treated as a plane when its doubled area exceeds
 /// this fraction of the product of two edge lengths.
 const PLANAR_MIN_SINE: f32 = 1e-4;
+/// The first body search reaches this many feather lengths above the
+/// tangent plane (see [`HeightField::add_body`]).
+const SKIN_BAND_PER_LENGTH: f32 = 0.3;
 /// The floor lies at least this many feather lengths below the tangent plane.
 const FLOOR_DEPTH_PER_LENGTH: f32 = 0.5;
 /// The root socket: the first 2.5 % of the shaft, where the feather enters
@@ -70,6 +73,8 @@ pub struct HeightField {
     pub(crate) floor: f32,
     /// End of the root socket along the shaft.
     pub(crate) socket_x: f32,
+    /// Skin below this height cannot bind any allowed pitch.
+    pub(crate) body_floor: f32,
     pub(crate) shape: FeatherShape,
     /// Obstacle tops per cell, `j·u + i` (row j across, column i along).
     pub(crate) obstacle: Vec<f32>,
@@ -80,23 +85,18 @@ pub struct HeightField {
     /// Column centres (x) and row centres (y).
     pub(crate) col_x: Vec<f32>,
     pub(crate) row_y: Vec<f32>,
+    /// Per column: the near edge (not before the socket's end) and the far
+    /// edge along the shaft, and their reciprocals.
+    pub(crate) col_near: Vec<f32>,
+    pub(crate) col_far: Vec<f32>,
+    pub(crate) inv_near: Vec<f32>,
+    pub(crate) inv_far: Vec<f32>,
+    /// First column reaching past the socket (earlier ones are ignored).
+    pub(crate) first_col: usize,
     /// Per-row shaft interval covered by the kite (scratch of the steps).
     pub(crate) row_span: Vec<[f32; 2]>,
-    /// Per-cell pitch constraints as functions of the roll (scratch of step 2).
-    pub(crate) roll_lines: Vec<RollLine>,
     /// Body triangle ids of the last query.
     pub(crate) body_ids: Vec<u32>,
-}
-
-/// The pitch a covered cell demands as a function of the lateral slope `q`
-/// of the rolled feather: `p ≥ a + c·q`, with `c = c_pos` for `q ≥ 0` and
-/// `c_neg` for `q < 0` (the cell's lowest corner under the feather changes
-/// side with the sign of the roll, so each constraint is convex in `q`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct RollLine {
-    pub(crate) a: f32,
-    pub(crate) c_pos: f32,
-    pub(crate) c_neg: f32,
 }
 
 impl HeightField {
@@ -110,14 +110,19 @@ impl HeightField {
             y_min: 0.0,
             floor: -1.0,
             socket_x: 0.0,
+            body_floor: -1.0,
             shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5 },
             obstacle: Vec::new(),
             body: Vec::new(),
             need: Vec::new(),
             col_x: Vec::new(),
             row_y: Vec::new(),
+            col_near: Vec::new(),
+            col_far: Vec::new(),
+            inv_near: Vec::new(),
+            inv_far: Vec::new(),
+            first_col: 0,
             row_span: Vec::new(),
-            roll_lines: Vec::new(),
             body_ids: Vec::new(),
         };
         f.set_resolution(u, v);
@@ -145,10 +150,11 @@ impl HeightField {
         for layer in [&mut self.obstacle, &mut self.body, &mut self.need] {
             layer.resize(u * v, 0.0);
         }
-        self.col_x.resize(u, 0.0);
+        for col in [&mut self.col_x, &mut self.col_near, &mut self.col_far, &mut self.inv_near, &mut self.inv_far] {
+            col.resize(u, 0.0);
+        }
         self.row_y.resize(v, 0.0);
         self.row_span.resize(v, [0.0; 2]);
-        self.roll_lines.reserve(u * v);
     }
 
     /// Clears both layers to the floor and lays the grid over `shape`'s
@@ -162,11 +168,18 @@ impl HeightField {
         let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
         self.floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
         self.socket_x = SOCKET_FRACTION * l;
+        self.body_floor = self.floor.max(-(l + self.dx) * (-min_pitch).max(0.0).tan() - self.dy);
         self.obstacle.fill(self.floor);
         self.body.fill(self.floor);
-        for (i, x) in self.col_x.iter_mut().enumerate() {
-            *x = (i as f32 + 0.5) * self.dx;
+        for i in 0..self.u {
+            let x = (i as f32 + 0.5) * self.dx;
+            self.col_x[i] = x;
+            self.col_near[i] = (x - 0.5 * self.dx).max(self.socket_x);
+            self.col_far[i] = x + 0.5 * self.dx;
+            self.inv_near[i] = 1.0 / self.col_near[i];
+            self.inv_far[i] = 1.0 / self.col_far[i];
         }
+        self.first_col = (0..self.u).find(|&i| self.col_far[i] > self.socket_x).unwrap_or(self.u);
         for (j, y) in self.row_y.iter_mut().enumerate() {
             *y = self.y_min + (j as f32 + 0.5) * self.dy;
         }
@@ -200,36 +213,66 @@ impl HeightField {
     /// Rasterises an obstacle feather's two world triangles, raised by its
     /// thickness. Returns whether any cell was touched (one collision test).
     pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]; 2], thickness: f32) -> bool {
-        let mut touched = false;
-        for tri in triangles {
-            let local = tri.map(|p| frame.to_local(p));
-            touched |= self.rasterise(Layer::Obstacle, local, thickness);
+        let (a, b) = (to_local3(frame, &triangles[0]), to_local3(frame, &triangles[1]));
+        // Both triangles at once against the footprint first (most
+        // candidates within reach miss it).
+        let lo = a[0].min(a[1]).min(a[2]).min(b[0]).min(b[1]).min(b[2]);
+        let hi = a[0].max(a[1]).max(a[2]).max(b[0]).max(b[1]).max(b[2]);
+        let (x_hi, y_hi) = (self.shape.length + self.dx, -self.y_min);
+        if hi.x < self.socket_x || lo.x > x_hi || hi.y < self.y_min || lo.y > y_hi || hi.z + thickness <= self.floor {
+            return false;
         }
-        touched
+        let first = self.rasterise(Layer::Obstacle, a, thickness);
+        self.rasterise(Layer::Obstacle, b, thickness) | first
     }
 
     /// Rasterises the body triangles near the feather (those facing its
     /// side) into the body layer.
+    ///
+    /// Skin lower than `(L + dx)·tan(−min_pitch)` below the tangent plane
+    /// can bind no allowed pitch, so it is not fetched (cells without skin
+    /// count as free space, capped, for the roll). The search first covers
+    /// the footprint up to a band over the tangent plane (where skin near
+    /// a root lies: convex skin falls away, gentle concave skin rises a
+    /// little); only when skin reaches the top of the band (a concave wall)
+    /// is the whole height up to one length searched. Separate geometry
+    /// hovering above the band with no skin rising to it (a wing folded
+    /// over the back) is thus not a wall the feather must climb.
     pub fn add_body(&mut self, frame: &RootFrame, body: &BodyIndex) {
-        let query = self.world_bounds(frame);
+        let reach = self.shape.length + self.dx;
+        let band = SKIN_BAND_PER_LENGTH * self.shape.length;
         let mut ids = std::mem::take(&mut self.body_ids);
-        body.triangles_in_box(&query, &mut ids);
+        body.triangles_in_box(&self.world_bounds(frame, self.body_floor, band), &mut ids);
+        let mut rises = false;
         for &t in &ids {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
                 continue;
             }
-            let local = body.corners(t).map(|p| frame.to_local(p));
+            let local = to_local3(frame, &body.corners(t));
+            rises |= local[0].z.max(local[1].z).max(local[2].z) >= 0.9 * band;
             self.rasterise(Layer::Body, local, 0.0);
+        }
+        if rises {
+            body.triangles_in_box(&self.world_bounds(frame, self.body_floor, reach), &mut ids);
+            for &t in &ids {
+                if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
+                    continue;
+                }
+                let local = to_local3(frame, &body.corners(t));
+                // Triangles wholly within the band were rasterised already.
+                if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
+                    self.rasterise(Layer::Body, local, 0.0);
+                }
+            }
         }
         self.body_ids = ids;
     }
 
-    /// World bounding box of the field's volume: the footprint from the
-    /// floor up to one feather length (nothing higher can be reached).
-    fn world_bounds(&self, frame: &RootFrame) -> Aabb {
+    /// World bounding box of the footprint between heights `z_lo` and `z_hi`.
+    fn world_bounds(&self, frame: &RootFrame, z_lo: f32, z_hi: f32) -> Aabb {
         let x = [0.0, self.shape.length + self.dx];
         let y = [self.y_min, -self.y_min];
-        let z = [self.floor, self.shape.length + self.dx];
+        let z = [z_lo, z_hi];
         let centre = Vec3::new(0.5 * (x[0] + x[1]), 0.0, 0.5 * (z[0] + z[1]));
         let half = Vec3::new(0.5 * (x[1] - x[0]), 0.5 * (y[1] - y[0]), 0.5 * (z[1] - z[0]));
         let c = frame.to_world(centre);
@@ -240,29 +283,33 @@ impl HeightField {
     /// Rasterises one triangle given in local coordinates; its top is its
     /// plane raised by `raise`. Returns whether any cell was touched.
     pub(crate) fn rasterise(&mut self, layer: Layer, tri: [Vec3; 3], raise: f32) -> bool {
-        let z_top = tri[0].z.max(tri[1].z).max(tri[2].z);
+        let z_top = max3(tri[0].z, tri[1].z, tri[2].z);
         if z_top + raise <= self.floor || z_top.is_nan() {
             return false;
         }
         let (inv_dx, inv_dy) = (1.0 / self.dx, 1.0 / self.dy);
         // Grid coordinates: cell (i, j) is the unit square [i, i+1] × [j, j+1].
-        let g = tri.map(|p| Vec2::new(p.x * inv_dx, (p.y - self.y_min) * inv_dy));
-        let (gmin, gmax) = (g[0].min(g[1]).min(g[2]), g[0].max(g[1]).max(g[2]));
+        let grid = |p: Vec3| Vec2::new(p.x * inv_dx, (p.y - self.y_min) * inv_dy);
+        let g = [grid(tri[0]), grid(tri[1]), grid(tri[2])];
+        let gmin = Vec2::new(min3(g[0].x, g[1].x, g[2].x), min3(g[0].y, g[1].y, g[2].y));
+        let gmax = Vec2::new(max3(g[0].x, g[1].x, g[2].x), max3(g[0].y, g[1].y, g[2].y));
         let (u, v) = (self.u as f32, self.v as f32);
         let socket_u = self.socket_x * inv_dx;
         if !(gmax.x >= socket_u && gmin.x <= u && gmax.y >= 0.0 && gmin.y <= v) {
             return false;
         }
-        let i0 = gmin.x.floor().max(0.0) as usize;
-        let i1 = (gmax.x.floor() as usize).min(self.u - 1);
-        let j0 = gmin.y.floor().max(0.0) as usize;
-        let j1 = (gmax.y.floor() as usize).min(self.v - 1);
-
-        let plane = TrianglePlane::new(g, tri.map(|p| p.z));
         // Columns wholly inside the root socket are skipped; the column
         // holding the socket's end only counts beyond it.
-        let socket_col = (socket_u.floor() as usize).min(self.u - 1);
+        let socket_col = (floor_i32(socket_u).max(0) as usize).min(self.u - 1);
         let socket_cut = socket_u - socket_col as f32;
+        let i0 = (floor_i32(gmin.x).max(0) as usize).max(socket_col);
+        let i1 = (floor_i32(gmax.x).max(0) as usize).min(self.u - 1);
+        let j0 = floor_i32(gmin.y).max(0) as usize;
+        let j1 = (floor_i32(gmax.y).max(0) as usize).min(self.v - 1);
+        if i0 > i1 || j0 > j1 {
+            return false;
+        }
+        let plane = TrianglePlane::new(g, [tri[0].z, tri[1].z, tri[2].z]);
         let cells = match layer {
             Layer::Obstacle => &mut self.obstacle,
             Layer::Body => &mut self.body,
@@ -277,36 +324,73 @@ impl HeightField {
                 },
                 None => (i0, i1),
             };
-            let lo = lo.max(socket_col);
-            if lo > hi {
-                continue;
-            }
             touched = true;
             let row = &mut cells[j * self.u..(j + 1) * self.u];
-            match &plane {
-                Some(p) => {
-                    let mut start = lo;
-                    if lo == socket_col {
-                        let (uc, half) = (socket_col as f32 + 0.5 * (1.0 + socket_cut), 0.5 * (1.0 - socket_cut));
-                        let h = (p.height_at(uc, vc) + p.du.abs() * half + 0.5 * p.dv.abs()).min(z_top) + raise;
-                        row[lo] = row[lo].max(h);
-                        start = lo + 1;
-                    }
-                    let base = p.height_at(0.5, vc) + p.slack;
-                    for (i, cell) in row.iter_mut().enumerate().take(hi + 1).skip(start) {
-                        let h = (base + p.du * i as f32).min(z_top) + raise;
-                        *cell = cell.max(h);
-                    }
-                }
-                None => {
-                    for cell in &mut row[lo..=hi] {
-                        *cell = cell.max(z_top + raise);
-                    }
-                }
+            let Some(p) = &plane else {
+                raise_row(&mut row[lo..=hi], z_top, 0.0, z_top, raise);
+                continue;
+            };
+            let mut start = lo;
+            if lo == socket_col {
+                let (uc, half) = (socket_col as f32 + 0.5 * (1.0 + socket_cut), 0.5 * (1.0 - socket_cut));
+                let h = (p.height_at(uc, vc) + p.du.abs() * half + 0.5 * p.dv.abs()).min(z_top) + raise;
+                row[lo] = row[lo].max(h);
+                start = lo + 1;
+            }
+            if start <= hi {
+                raise_row(&mut row[start..=hi], p.height_at(start as f32 + 0.5, vc) + p.slack, p.du, z_top, raise);
             }
         }
         touched
     }
+}
+
+/// The largest of three values (plain comparisons; inputs are finite or
+/// the triangle is rejected by the NaN check on its top).
+#[inline(always)]
+fn max3(a: f32, b: f32, c: f32) -> f32 {
+    let m = if a > b { a } else { b };
+    if m > c { m } else { c }
+}
+
+/// The smallest of three values (see [`max3`]).
+#[inline(always)]
+fn min3(a: f32, b: f32, c: f32) -> f32 {
+    let m = if a < b { a } else { b };
+    if m < c { m } else { c }
+}
+
+/// A world triangle in the root frame's local coordinates.
+#[inline]
+fn to_local3(frame: &RootFrame, t: &[Vec3; 3]) -> [Vec3; 3] {
+    [frame.to_local(t[0]), frame.to_local(t[1]), frame.to_local(t[2])]
+}
+
+/// Raises each cell to `min(first + k·step, cap) + raise` (k = its
+/// position in `cells`). Written with plain comparisons so it vectorises.
+#[inline]
+fn raise_row(cells: &mut [f32], first: f32, step: f32, cap: f32, raise: f32) {
+    // An i32 position converts to f32 in vector registers; usize does not.
+    for (k, cell) in (0..cells.len() as i32).zip(cells.iter_mut()) {
+        let z = first + step * k as f32;
+        let h = if z < cap { z } else { cap } + raise;
+        // An unconditional store of the larger keeps the loop vectorised.
+        *cell = if h > *cell { h } else { *cell };
+    }
+}
+
+/// `⌊x⌋` as an integer, saturating (no libm call on baseline x86-64).
+#[inline]
+pub(crate) fn floor_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i - i32::from((i as f32) > x)
+}
+
+/// `⌈x⌉` as an integer, saturating.
+#[inline]
+pub(crate) fn ceil_i32(x: f32) -> i32 {
+    let i = x as i32;
+    i + i32::from((i as f32) < x)
 }
 
 /// A triangle projected to grid coordinates, with its height plane and the
@@ -320,8 +404,9 @@ struct TrianglePlane {
     /// centre value plus this.
     slack: f32,
     /// Edge functions `a·u + b·v + c ≥ 0` inside, `c` already loosened by
-    /// half a cell so that a cell passes when its most inside corner does.
-    edges: [[f32; 3]; 3],
+    /// half a cell so that a cell passes when its most inside corner does;
+    /// with `1/a` (0 when `a = 0`).
+    edges: [[f32; 4]; 3],
 }
 
 impl TrianglePlane {
@@ -338,7 +423,7 @@ impl TrianglePlane {
         let dv = (e1.x * dz2 - dz1 * e2.x) / det;
         let z0 = z[0] - du * g[0].x - dv * g[0].y;
         let s = det.signum();
-        let mut edges = [[0.0; 3]; 3];
+        let mut edges = [[0.0; 4]; 3];
         for (k, edge) in edges.iter_mut().enumerate() {
             let (p, q) = (g[k], g[(k + 1) % 3]);
             let d = q - p;
@@ -347,7 +432,7 @@ impl TrianglePlane {
             let b = s * d.x;
             let c = s * (d.y * p.x - d.x * p.y);
             let loosen = 0.5 * (d.x.abs() + d.y.abs()) * (1.0 + 1e-4) + 1e-5;
-            *edge = [a, b, c + loosen];
+            *edge = [a, b, c + loosen, if a != 0.0 { 1.0 / a } else { 0.0 }];
         }
         Some(Self { z0, du, dv, slack: 0.5 * (du.abs() + dv.abs()), edges })
     }
@@ -359,19 +444,27 @@ impl TrianglePlane {
 
     /// Columns `lo..=hi` of row centre `vc` that may touch the triangle,
     /// within `[i0, i1]`.
+    #[inline]
     fn row_span(&self, vc: f32, i0: usize, i1: usize) -> Option<(usize, usize)> {
+        // Bounds on the column centre i + 0.5, tightest over the edges,
+        // rounded once at the end.
         let (mut lo, mut hi) = (i0 as f32, i1 as f32);
-        for &[a, b, c] in &self.edges {
+        for &[a, b, c, inv_a] in &self.edges {
             let rest = b * vc + c;
             // a·(i + 0.5) + rest ≥ 0.
+            let t = -rest * inv_a - 0.5;
             if a > 0.0 {
-                lo = lo.max((-rest / a - 0.5).ceil());
+                lo = if t > lo { t } else { lo };
             } else if a < 0.0 {
-                hi = hi.min((-rest / a - 0.5).floor());
+                hi = if t < hi { t } else { hi };
             } else if rest < 0.0 {
                 return None;
             }
         }
+        if lo > hi {
+            return None;
+        }
+        let (lo, hi) = (ceil_i32(lo), floor_i32(hi));
         (lo <= hi).then_some((lo as usize, hi as usize))
     }
 }

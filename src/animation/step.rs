@@ -79,6 +79,8 @@ pub fn step_coat(
             }
         }
     }
+    report.deformed = step.r_k.len();
+    report.seeds = step.seeds.iter().filter(|s| **s).count();
     report.reorder_seconds = start.elapsed().as_secs_f64();
     progress.check(Phase::Adjusting, 0.0)?;
 

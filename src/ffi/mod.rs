@@ -185,6 +185,10 @@ pub unsafe extern "C" fn plumage_system_feathers(
 /// Copies the feathers' triangles as xyz floats: two triangles (one per
 /// vane) of three corners per feather, 18 floats per feather, in the order
 /// of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
+/// Corner order per feather: (root, tip, left corner), (root, right corner,
+/// tip), where "left" lies on the binormal side (normal × shaft); both
+/// triangles face away from the skin, and the root and tip corners of the
+/// two triangles are bit-identical, so a host can share them.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_feather_triangles(
     sys: *const PlumageSystem,

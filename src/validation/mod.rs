@@ -90,7 +90,7 @@ fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
                         continue;
                     }
                     let bb = grid.bounds(tb);
-                    if !ba.overlaps(&bb) || !grid.is_first_shared_cell(cell, &ba, &bb) {
+                    if !ba.overlaps(&bb) || grid.first_shared_cell(ta, tb) != cell {
                         continue;
                     }
                     if triangles_intersect(&grid.corners(ta), &grid.corners(tb)) {

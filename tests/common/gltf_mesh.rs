@@ -38,6 +38,12 @@ pub fn load_model(file: &str) -> Option<Shape> {
 
 /// Parses GLB bytes into one flat mesh.
 pub fn read_glb(bytes: &[u8]) -> Result<Shape, String> {
+    read_glb_with_weights(bytes, None)
+}
+
+/// Parses GLB bytes into one flat mesh, with `weights` (node index, morph
+/// weights) replacing that node's default morph weights.
+pub fn read_glb_with_weights(bytes: &[u8], weights: Option<(usize, &[f32])>) -> Result<Shape, String> {
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| e.to_string())?;
     let blob: Option<&[u8]> = gltf.blob.as_deref();
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next()).ok_or("no scene")?;
@@ -46,7 +52,10 @@ pub fn read_glb(bytes: &[u8]) -> Result<Shape, String> {
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
-            let weights = node.weights().or(mesh.weights()).unwrap_or(&[]);
+            let weights = match weights {
+                Some((index, w)) if index == node.index() => w,
+                _ => node.weights().or(mesh.weights()).unwrap_or(&[]),
+            };
             for primitive in mesh.primitives() {
                 if primitive.mode() != gltf::mesh::Mode::Triangles {
                     continue;
@@ -93,4 +102,52 @@ fn append_primitive(
         None => out.indices.extend((0..positions.len() as u32).map(|i| i + base)),
     }
     Ok(())
+}
+
+/// The frames of a model's first morph-weight animation sampled at `fps`
+/// (LINEAR interpolation of the weights; node transforms taken as static),
+/// each as flat positions in the numbering of [`read_glb`]. `None`, with a
+/// message, when the file is missing.
+pub fn morph_clip(file: &str, fps: f32) -> Option<(Shape, Vec<Vec<f32>>)> {
+    let path = data_dir().join(file);
+    let bytes = match std::fs::read(&path) {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("SKIPPED: test model {} not available ({e}); the test checks nothing.", path.display());
+            return None;
+        }
+    };
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("readable GLB");
+    let blob = gltf.blob.as_deref();
+    let animation = gltf.animations().next().expect("an animation");
+    let channel = animation
+        .channels()
+        .find(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights)
+        .expect("a morph weight channel");
+    let node = channel.target().node().index();
+    let reader = channel.reader(|b| match b.source() {
+        gltf::buffer::Source::Bin => blob,
+        gltf::buffer::Source::Uri(_) => None,
+    });
+    let times: Vec<f32> = reader.read_inputs().expect("key times").collect();
+    let values: Vec<f32> = match reader.read_outputs().expect("key values") {
+        gltf::animation::util::ReadOutputs::MorphTargetWeights(w) => w.into_f32().collect(),
+        _ => unreachable!("morph weight channel"),
+    };
+    let targets = values.len() / times.len();
+    let duration = *times.last().unwrap();
+    let count = (duration * fps).floor() as usize + 1;
+    let rest = read_glb(&bytes).expect("rest shape");
+    let frames = (0..count)
+        .map(|k| {
+            let t = (k as f32 / fps).min(duration);
+            let i = times.partition_point(|&x| x <= t).clamp(1, times.len() - 1);
+            let (t0, t1) = (times[i - 1], times[i]);
+            let u = if t1 > t0 { ((t - t0) / (t1 - t0)).clamp(0.0, 1.0) } else { 0.0 };
+            let w: Vec<f32> =
+                (0..targets).map(|m| values[(i - 1) * targets + m] * (1.0 - u) + values[i * targets + m] * u).collect();
+            read_glb_with_weights(&bytes, Some((node, &w))).expect("frame shape").positions
+        })
+        .collect();
+    Some((rest, frames))
 }

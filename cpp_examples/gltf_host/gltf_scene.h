@@ -1,0 +1,85 @@
+// One mesh of a glTF model, evaluated at any time of one animation clip:
+// node hierarchy (TRS or matrix), morph targets and skins.
+#pragma once
+
+#include "animated_mesh.h"
+#include "animation.h"
+#include "math3d.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tinygltf {
+class Model;
+}
+
+namespace plumage_host {
+
+class GltfScene final : public AnimatedMesh {
+public:
+    // Picks the mesh named (or numbered) `mesh_request`, else the largest
+    // skinned or morphed mesh, else the largest mesh; and the clip named or
+    // numbered `clip_request`, else clip 0 when there is one. Throws
+    // UsageError for a mesh or clip that does not exist, InputError for
+    // content the host cannot read.
+    GltfScene(const tinygltf::Model& model, const std::string& mesh_request, const std::string& clip_request);
+
+    std::string mesh_name() const override { return mesh_name_; }
+    const std::vector<float>& rest_positions() const override { return rest_positions_; }
+    const std::vector<uint32_t>& triangles() const override { return indices_; }
+    std::optional<ClipInfo> clip() const override;
+    void pose_at(double seconds, std::vector<float>& xyz) const override;
+
+    int mesh_index() const { return mesh_index_; }
+    bool skinned() const { return !joints_.empty(); }
+    size_t morph_target_count() const { return target_deltas_.size(); }
+
+private:
+    struct NodeTransform {
+        Vec3 translation;
+        Quat rotation;
+        Vec3 scale{1, 1, 1};
+        std::optional<Mat4> matrix;  // a node with a matrix is never animated
+    };
+    struct Influence {
+        uint32_t joint = 0;  // index into joints_
+        double weight = 0;
+    };
+
+    void load_hierarchy(const tinygltf::Model& model);
+    void load_mesh(const tinygltf::Model& model);
+    void load_primitive(const tinygltf::Model& model, size_t primitive, size_t target_count);
+    void load_skin(const tinygltf::Model& model, int skin);
+    void load_skin_weights(const tinygltf::Model& model, size_t primitive, size_t vertex_offset);
+    void select_clip(const tinygltf::Model& model, const std::string& request);
+    void evaluate(const Clip* clip, double seconds, std::vector<float>& xyz) const;
+    void apply_clip(const Clip& clip, double seconds, std::vector<NodeTransform>& local, std::vector<double>& weights) const;
+    std::vector<Mat4> global_transforms(const std::vector<NodeTransform>& local) const;
+    std::vector<double> morphed_positions(const std::vector<double>& weights) const;
+    void skin_positions(const std::vector<Mat4>& global, const std::vector<double>& p, std::vector<float>& xyz) const;
+
+    int mesh_index_ = -1;
+    std::string mesh_name_;
+    int instance_node_ = -1;  // the node that instantiates the mesh (-1: none)
+
+    std::vector<NodeTransform> nodes_;
+    std::vector<int> parent_;
+    std::vector<size_t> node_order_;  // parents before children
+
+    std::vector<double> base_positions_;
+    std::vector<uint32_t> indices_;
+    std::vector<std::vector<double>> target_deltas_;
+    std::vector<double> base_weights_;
+
+    std::vector<int> joints_;
+    std::vector<Mat4> inverse_bind_;
+    std::vector<size_t> influence_begin_;  // per vertex, into influences_ (CSR)
+    std::vector<Influence> influences_;
+
+    std::optional<Clip> clip_;
+    int clip_index_ = -1;
+    std::vector<float> rest_positions_;
+};
+
+}  // namespace plumage_host

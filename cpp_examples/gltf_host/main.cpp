@@ -1,0 +1,198 @@
+// plumage_gltf: dresses an animated glTF mesh (or the built-in model) with
+// Plumage feathers frame by frame, and writes a report and a .glb.
+#include "errors.h"
+#include "gltf_loader.h"
+#include "gltf_scene.h"
+#include "gltf_writer.h"
+#include "options.h"
+#include "plumage_system.h"
+#include "procedural_model.h"
+#include "progress.h"
+#include "report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <new>
+
+namespace plumage_host {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::unique_ptr<AnimatedMesh> open_subject(const Options& opt) {
+    if (!opt.input.empty()) return std::make_unique<GltfScene>(load_gltf_file(opt.input), opt.mesh, opt.animation);
+    auto body = std::make_unique<ProceduralBody>();
+    if (!opt.mesh.empty() && opt.mesh != body->mesh_name() && opt.mesh != "0") throw UsageError("--mesh " + opt.mesh + ": the built-in model has one mesh, procedural_body");
+    if (!opt.animation.empty() && opt.animation != "swim" && opt.animation != "0") throw UsageError("--animation " + opt.animation + ": the built-in model has one clip, swim");
+    return body;
+}
+
+PlumageConfig make_config(const Options& opt) {
+    PlumageConfig cfg;
+    plumage_config_init(&cfg);
+    if (opt.feathers) cfg.target_feathers = *opt.feathers;
+    if (opt.spacing) cfg.spacing = *opt.spacing;
+    if (opt.sampler) cfg.sampler = *opt.sampler;
+    if (opt.theta_deg) cfg.theta = static_cast<float>(*opt.theta_deg * kPi / 180.0);
+    if (opt.seed) cfg.seed = *opt.seed;
+    if (opt.flow) std::copy(opt.flow->begin(), opt.flow->end(), cfg.flow_axis);
+    if (opt.mode) cfg.mode = *opt.mode;
+    if (opt.threads) cfg.threads = *opt.threads;
+    return cfg;
+}
+
+// Clip times of the frames to step: start + k / fps, the whole clip by default.
+std::vector<double> frame_times(const Options& opt, const std::optional<ClipInfo>& clip) {
+    size_t n = 0;
+    if (opt.frames) n = static_cast<size_t>(*opt.frames);
+    else if (clip) n = static_cast<size_t>(std::floor(clip->duration * opt.fps + 1e-6)) + 1;
+    std::vector<double> times(n);
+    for (size_t k = 0; k < n; ++k) times[k] = (clip ? clip->start : 0.0) + static_cast<double>(k) / opt.fps;
+    return times;
+}
+
+nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, const std::optional<ClipInfo>& clip, size_t frames) {
+    nlohmann::ordered_json j = config_to_json(cfg);
+    j["fps"] = opt.fps;
+    j["frames"] = frames;
+    j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
+                          : nlohmann::ordered_json(nullptr);
+    j["validate"] = validate_name(opt.validate);
+    j["plumage_version"] = plumage_version();
+    return j;
+}
+
+bool validate_frame(ValidateWhen when, size_t k, size_t n) { return when == ValidateWhen::Every || (when == ValidateWhen::Last && k + 1 == n); }
+
+// One run of the host: the rest pose, then every frame, then the outputs.
+class Session {
+public:
+    explicit Session(const Options& opt) : opt_(opt) {
+        const Stopwatch load_clock;
+        subject_ = open_subject(opt_);
+        report_.set_timing("load_seconds", load_clock.seconds());
+        clip_ = subject_->clip();
+        times_ = frame_times(opt_, clip_);
+    }
+
+    void create_rest_pose() {
+        PlumageConfig cfg = make_config(opt_);
+        cfg.progress = &ProgressLine::library_callback;
+        cfg.progress_user_data = &progress_;
+        report_.set_subject(opt_.input.empty() ? "builtin:procedural_body" : opt_.input, subject_->mesh_name(), subject_->vertex_count(),
+                            subject_->triangle_count(), run_config(cfg, opt_, clip_, times_.size()));
+        progress_.set_context("rest pose");
+        const Stopwatch create_clock;
+        sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles());
+        report_.set_timing("create_seconds", create_clock.seconds());
+        check(plumage_system_feather_count(sys_.get(), &feather_count_), sys_.get(), "plumage_system_feather_count");
+        report_.set_feathers(feather_count_);
+        report_.set_sampling(sampling_stats(*sys_));
+        report_.set_ordering(ordering_stats(*sys_));
+        report_.set_static(frame_stats(*sys_), opt_.validate != ValidateWhen::None ? validate(*sys_) : std::nullopt);
+        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_triangles(*sys_));
+    }
+
+    void step_frames() {
+        const Stopwatch frames_clock;
+        std::vector<float> pose;
+        for (size_t k = 0; k < times_.size(); ++k) {
+            subject_->pose_at(times_[k], pose);
+            progress_.set_context("frame " + std::to_string(k + 1) + "/" + std::to_string(times_.size()));
+            const Stopwatch step_clock;
+            check(plumage_system_step(sys_.get(), pose.data(), pose.size() / 3), sys_.get(), "plumage_system_step");
+            const double step_seconds = step_clock.seconds();
+            step_total_ += step_seconds;
+            // Validation and copies happen after the clock stopped: not step time.
+            const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
+            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v);
+            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_triangles(*sys_));
+            progress_.frame_done(k + 1, times_.size(), step_seconds);
+        }
+        progress_.clear();
+        report_.set_timing("frames_seconds", frames_clock.seconds());
+    }
+
+    void finish() {
+        std::printf("plumage_gltf: %s, mesh \"%s\": %zu vertices, %zu triangles, %zu feathers\n", opt_.input.empty() ? "built-in model" : opt_.input.c_str(),
+                    subject_->mesh_name().c_str(), subject_->vertex_count(), subject_->triangle_count(), feather_count_);
+        if (!times_.empty()) {
+            std::printf("plumage_gltf: %zu frames of \"%s\" at %g fps, mean step %.3f ms\n", times_.size(), clip_ ? clip_->name.c_str() : "(no clip)",
+                        opt_.fps, step_total_ / static_cast<double>(times_.size()) * 1e3);
+        }
+        if (recorder_) {
+            const Stopwatch write_clock;
+            recorder_->write_glb(opt_.out);
+            report_.set_timing("write_seconds", write_clock.seconds());
+            std::printf("plumage_gltf: wrote %s\n", opt_.out.c_str());
+            if (recorder_->untracked_feathers() > 0) {
+                std::printf("plumage_gltf: %zu feathers absent at rest were left out of the .glb\n", recorder_->untracked_feathers());
+            }
+        }
+        if (!opt_.report.empty()) {
+            report_.set_timing("total_seconds", total_.seconds());
+            report_.write(opt_.report);
+            std::printf("plumage_gltf: wrote %s\n", opt_.report.c_str());
+        }
+    }
+
+private:
+    const Options& opt_;
+    Stopwatch total_;
+    std::unique_ptr<AnimatedMesh> subject_;
+    std::optional<ClipInfo> clip_;
+    std::vector<double> times_;
+    Report report_;
+    ProgressLine progress_;  // the library holds a pointer to it: declared before, so destroyed after, the system
+    SystemHandle sys_;
+    size_t feather_count_ = 0;
+    std::optional<AnimationRecorder> recorder_;
+    double step_total_ = 0;
+};
+
+int run(int argc, const char* const* argv) {
+    const Options opt = parse_options(argc, argv);
+    if (opt.help) {
+        std::cout << usage_text();
+        return 0;
+    }
+    if (opt.version) {
+        std::cout << "plumage_gltf (Plumage " << plumage_version() << ", ABI " << plumage_abi_version() << ")\n";
+        return 0;
+    }
+    check_abi();
+    Session session(opt);
+    session.create_rest_pose();
+    session.step_frames();
+    session.finish();
+    return 0;
+}
+
+int fail(int code, const std::string& message) {
+    std::fprintf(stderr, "plumage_gltf: %s\n", message.c_str());
+    return code;
+}
+
+}  // namespace
+}  // namespace plumage_host
+
+int main(int argc, char** argv) {
+    using namespace plumage_host;
+    try {
+        return run(argc, argv);
+    } catch (const UsageError& e) {
+        return fail(2, std::string(e.what()) + " (see --help)");
+    } catch (const InputError& e) {
+        return fail(3, e.what());
+    } catch (const LibraryError& e) {
+        return fail(4, e.what());
+    } catch (const OutputError& e) {
+        return fail(1, e.what());
+    } catch (const std::bad_alloc&) {
+        return fail(1, "out of memory");
+    } catch (const std::exception& e) {
+        return fail(1, std::string("internal error: ") + e.what());
+    }
+}

@@ -1,0 +1,168 @@
+#include "options.h"
+
+#include "errors.h"
+#include "plumage.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+namespace plumage_host {
+namespace {
+
+[[noreturn]] void bad(const std::string& option, const std::string& value, const std::string& want) {
+    throw UsageError(option + " " + value + ": expected " + want);
+}
+
+uint64_t parse_unsigned(const std::string& option, const std::string& text, uint64_t max) {
+    if (text.empty() || text[0] < '0' || text[0] > '9') bad(option, text, "a non-negative integer");
+    errno = 0;
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+    if (errno != 0 || *end != '\0' || v > max) bad(option, text, "an integer from 0 to " + std::to_string(max));
+    return v;
+}
+
+double parse_real(const std::string& option, const std::string& text) {
+    errno = 0;
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || errno != 0 || *end != '\0' || !std::isfinite(v)) bad(option, text, "a finite number");
+    return v;
+}
+
+float parse_float(const std::string& option, const std::string& text) {
+    const double v = parse_real(option, text);
+    if (std::fabs(v) > std::numeric_limits<float>::max()) bad(option, text, "a number in float range");
+    return static_cast<float>(v);
+}
+
+std::array<float, 3> parse_vector(const std::string& option, const std::string& text) {
+    std::array<float, 3> v{};
+    size_t start = 0;
+    for (size_t i = 0; i < 3; ++i) {
+        const size_t comma = text.find(',', start);
+        if ((i < 2) != (comma != std::string::npos)) bad(option, text, "X,Y,Z");
+        v[i] = parse_float(option, text.substr(start, i < 2 ? comma - start : std::string::npos));
+        start = comma + 1;
+    }
+    return v;
+}
+
+template <size_t N>
+uint32_t parse_choice(const std::string& option, const std::string& text, const char* const (&names)[N], const uint32_t (&values)[N]) {
+    std::string want;
+    for (size_t i = 0; i < N; ++i) {
+        if (text == names[i]) return values[i];
+        want += (i ? "|" : "") + std::string(names[i]);
+    }
+    bad(option, text, want);
+}
+
+bool takes_value(const std::string& option) {
+    static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
+                                           "--theta", "--seed",     "--flow", "--mode",    "--threads",  "--validate", "--out", "--report"};
+    for (const char* o : kOptions) {
+        if (option == o) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+const char* validate_name(ValidateWhen when) {
+    switch (when) {
+    case ValidateWhen::Every: return "every";
+    case ValidateWhen::Last: return "last";
+    default: return "none";
+    }
+}
+
+const char* sampler_name(uint32_t sampler) {
+    return sampler == PLUMAGE_SAMPLER_GUIDED ? "guided" : sampler == PLUMAGE_SAMPLER_RANDOM ? "random" : "unknown";
+}
+
+const char* mode_name(uint32_t mode) {
+    switch (mode) {
+    case PLUMAGE_MODE_INCREMENTAL: return "incremental";
+    case PLUMAGE_MODE_LEGACY: return "legacy";
+    case PLUMAGE_MODE_REBUILD: return "rebuild";
+    default: return "unknown";
+    }
+}
+
+std::string usage_text() {
+    return "usage: plumage_gltf [INPUT.glb|INPUT.gltf] [options]\n"
+           "  no INPUT             the built-in procedural model (a swimming body, 6016 triangles)\n"
+           "  --mesh NAME|I        mesh to dress (default: the largest skinned or morphed mesh)\n"
+           "  --animation NAME|I   clip to play (default 0)\n"
+           "  --fps F              sampling rate of the clip (default 30)\n"
+           "  --frames N           frames to step (default: the whole clip); 0 = rest pose only\n"
+           "  --feathers N         target feather count (or --spacing D: root spacing in model units)\n"
+           "  --sampler guided|random   --theta DEG   --seed S   --flow X,Y,Z\n"
+           "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
+           "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
+           "  --out FILE.glb       write the body and its animated feathers\n"
+           "  --report FILE.json   write the machine-readable report\n"
+           "  --version, --help\n"
+           "exit codes: 0 success, 1 output not written, 2 usage error, 3 unreadable or unsupported input,\n"
+           "            4 library error\n";
+}
+
+Options parse_options(int argc, const char* const* argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        std::string arg = argv[i];
+        if (arg.size() < 2 || arg[0] != '-') {
+            if (!o.input.empty()) throw UsageError("more than one input file: " + o.input + ", " + arg);
+            o.input = arg;
+            continue;
+        }
+        if (arg == "-h" || arg == "--help") {
+            o.help = true;
+            continue;
+        }
+        if (arg == "--version") {
+            o.version = true;
+            continue;
+        }
+        std::string value;
+        const size_t eq = arg.find('=');
+        const bool inline_value = eq != std::string::npos;
+        if (inline_value) {
+            value = arg.substr(eq + 1);
+            arg.resize(eq);
+        }
+        if (!takes_value(arg)) throw UsageError("unknown option " + arg);
+        if (!inline_value) {
+            if (i + 1 >= argc) throw UsageError(arg + ": missing value");
+            value = argv[++i];
+        }
+        if (arg == "--mesh") o.mesh = value;
+        else if (arg == "--animation") o.animation = value;
+        else if (arg == "--fps") {
+            o.fps = parse_real(arg, value);
+            if (!(o.fps > 0) || o.fps > 1e4) bad(arg, value, "a rate above 0 and at most 10000");
+        } else if (arg == "--frames") o.frames = parse_unsigned(arg, value, 10000000);
+        else if (arg == "--feathers") o.feathers = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
+        else if (arg == "--spacing") o.spacing = parse_float(arg, value);
+        else if (arg == "--sampler") o.sampler = parse_choice(arg, value, {"guided", "random"}, {PLUMAGE_SAMPLER_GUIDED, PLUMAGE_SAMPLER_RANDOM});
+        else if (arg == "--theta") o.theta_deg = parse_float(arg, value);
+        else if (arg == "--seed") o.seed = parse_unsigned(arg, value, UINT64_MAX);
+        else if (arg == "--flow") o.flow = parse_vector(arg, value);
+        else if (arg == "--mode") {
+            o.mode = parse_choice(arg, value, {"incremental", "legacy", "rebuild"}, {PLUMAGE_MODE_INCREMENTAL, PLUMAGE_MODE_LEGACY, PLUMAGE_MODE_REBUILD});
+        } else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
+        else if (arg == "--validate") {
+            const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});
+            o.validate = v == 0 ? ValidateWhen::Every : v == 1 ? ValidateWhen::Last : ValidateWhen::None;
+        } else if (arg == "--out") o.out = value;
+        else if (arg == "--report") o.report = value;
+        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
+    }
+    if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
+    return o;
+}
+
+}  // namespace plumage_host

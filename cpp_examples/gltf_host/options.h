@@ -1,0 +1,43 @@
+// The command line of plumage_gltf.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace plumage_host {
+
+enum class ValidateWhen { Every, Last, None };
+
+struct Options {
+    std::string input;  // empty: the built-in procedural model
+    std::string mesh;
+    std::string animation;
+    double fps = 30;
+    std::optional<uint64_t> frames;  // default: the whole clip
+    // Library settings; unset ones keep plumage_config_init's defaults.
+    std::optional<uint32_t> feathers;
+    std::optional<float> spacing;
+    std::optional<uint32_t> sampler;
+    std::optional<float> theta_deg;
+    std::optional<uint64_t> seed;
+    std::optional<std::array<float, 3>> flow;
+    std::optional<uint32_t> mode;
+    std::optional<uint32_t> threads;
+    ValidateWhen validate = ValidateWhen::Last;
+    std::string out;
+    std::string report;
+    bool help = false;
+    bool version = false;
+};
+
+// Parses argv (throws UsageError with a one-line reason).
+Options parse_options(int argc, const char* const* argv);
+
+std::string usage_text();
+const char* validate_name(ValidateWhen when);
+const char* sampler_name(uint32_t sampler);
+const char* mode_name(uint32_t mode);
+
+}  // namespace plumage_host

@@ -1,0 +1,88 @@
+#include "plumage_system.h"
+
+#include <type_traits>
+
+namespace plumage_host {
+namespace {
+
+// The copy-out protocol: ask the length with a NULL buffer, then copy.
+template <class T>
+std::vector<T> copy_out(uint32_t (*query)(const PlumageSystem*, T*, size_t, size_t*), const PlumageSystem& sys, const char* call) {
+    size_t need = 0;
+    const uint32_t status = query(&sys, nullptr, 0, &need);
+    if (status == PLUMAGE_STATUS_OK && need == 0) return {};
+    if (status != PLUMAGE_STATUS_BUFFER_TOO_SMALL) check(status, &sys, call);
+    std::vector<T> out(need);
+    size_t got = 0;
+    check(query(&sys, out.data(), out.size(), &got), &sys, call);
+    out.resize(std::min(got, need));
+    return out;
+}
+
+template <class Stats>
+std::optional<Stats> stats_query(uint32_t (*query)(const PlumageSystem*, Stats*), const PlumageSystem& sys, const char* call) {
+    Stats stats{};
+    stats.struct_size = sizeof(Stats);
+    const uint32_t status = query(&sys, &stats);
+    if (status == PLUMAGE_STATUS_NOT_AVAILABLE) return std::nullopt;
+    check(status, &sys, call);
+    return stats;
+}
+
+}  // namespace
+
+LibraryError::LibraryError(const std::string& call, uint32_t status, const std::string& message)
+    : std::runtime_error(call + " failed: " + plumage_status_name(status) + (message.empty() ? "" : ": " + message)), status_(status) {}
+
+std::string last_error(const PlumageSystem* sys) {
+    const size_t need = plumage_system_last_error(sys, nullptr, 0);
+    if (need <= 1) return {};
+    std::string text(need, '\0');
+    plumage_system_last_error(sys, text.data(), text.size());
+    text.resize(need - 1);
+    return text;
+}
+
+void check(uint32_t status, const PlumageSystem* sys, const char* call) {
+    if (status != PLUMAGE_STATUS_OK) throw LibraryError(call, status, last_error(sys));
+}
+
+void check_abi() {
+    if (plumage_abi_version() != PLUMAGE_ABI_VERSION) {
+        throw LibraryError("plumage_abi_version", PLUMAGE_STATUS_INVALID_ARGUMENT,
+                           "library ABI " + std::to_string(plumage_abi_version()) + ", header ABI " + std::to_string(PLUMAGE_ABI_VERSION));
+    }
+}
+
+SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices) {
+    PlumageMeshDesc mesh;
+    plumage_mesh_desc_init(&mesh);
+    mesh.positions = positions.data();
+    mesh.vertex_count = positions.size() / 3;
+    mesh.indices = indices.data();
+    mesh.triangle_count = indices.size() / 3;
+    PlumageSystem* raw = nullptr;
+    const uint32_t status = plumage_system_create(&cfg, &mesh, &raw);
+    SystemHandle sys(raw);  // owned before anything can throw
+    check(status, nullptr, "plumage_system_create");
+    return sys;
+}
+
+std::vector<PlumageFeather> feathers(const PlumageSystem& sys) { return copy_out(&plumage_system_feathers, sys, "plumage_system_feathers"); }
+
+std::vector<float> feather_triangles(const PlumageSystem& sys) {
+    return copy_out(&plumage_system_feather_triangles, sys, "plumage_system_feather_triangles");
+}
+
+std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys) {
+    return stats_query(&plumage_system_sampling_stats, sys, "plumage_system_sampling_stats");
+}
+std::optional<PlumageOrderingStats> ordering_stats(const PlumageSystem& sys) {
+    return stats_query(&plumage_system_ordering_stats, sys, "plumage_system_ordering_stats");
+}
+std::optional<PlumageFrameStats> frame_stats(const PlumageSystem& sys) {
+    return stats_query(&plumage_system_frame_stats, sys, "plumage_system_frame_stats");
+}
+std::optional<PlumageValidation> validate(const PlumageSystem& sys) { return stats_query(&plumage_system_validate, sys, "plumage_system_validate"); }
+
+}  // namespace plumage_host

@@ -1,0 +1,57 @@
+// A thin C++ layer over the Plumage C ABI: an owning handle, statuses
+// turned into LibraryError, the copy-out protocol and the stats queries.
+#pragma once
+
+#include "plumage.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace plumage_host {
+
+struct SystemDeleter {
+    void operator()(PlumageSystem* sys) const noexcept { plumage_system_destroy(sys); }
+};
+using SystemHandle = std::unique_ptr<PlumageSystem, SystemDeleter>;
+
+// A library call failed (exit 4): the call, the status and the library's message.
+class LibraryError : public std::runtime_error {
+public:
+    LibraryError(const std::string& call, uint32_t status, const std::string& message);
+    uint32_t status() const { return status_; }
+
+private:
+    uint32_t status_;
+};
+
+// The library's message for the last failure on `sys` (NULL: on this thread, without a system).
+std::string last_error(const PlumageSystem* sys);
+
+// Throws LibraryError unless status is PLUMAGE_STATUS_OK.
+void check(uint32_t status, const PlumageSystem* sys, const char* call);
+
+// Fails unless the loaded library speaks this header's ABI.
+void check_abi();
+
+SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices);
+
+std::vector<PlumageFeather> feathers(const PlumageSystem& sys);
+std::vector<float> feather_triangles(const PlumageSystem& sys);
+
+// Figures the library has computed; std::nullopt when it answers NOT_AVAILABLE.
+std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys);
+std::optional<PlumageOrderingStats> ordering_stats(const PlumageSystem& sys);
+std::optional<PlumageFrameStats> frame_stats(const PlumageSystem& sys);
+std::optional<PlumageValidation> validate(const PlumageSystem& sys);
+
+}  // namespace plumage_host
+
+// Whether the library wrote `field` of a stats struct: it sets struct_size
+// to the bytes it filled, which an older library may keep below sizeof.
+#define PLUMAGE_FILLED(stats, field) \
+    ((stats).struct_size >= offsetof(std::decay_t<decltype(stats)>, field) + sizeof((stats).field))

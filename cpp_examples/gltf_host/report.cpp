@@ -1,0 +1,176 @@
+#include "report.h"
+
+#include "errors.h"
+#include "options.h"
+#include "plumage_system.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+namespace plumage_host {
+namespace {
+
+using json = nlohmann::ordered_json;
+
+// JSON has no NaN or infinity: such a figure is left out.
+void put(json& j, const char* key, double v) {
+    if (std::isfinite(v)) j[key] = v;
+}
+
+// The validation figures, shared by `static` and each frame.
+void put_validation(json& j, const PlumageValidation& v) {
+    if (PLUMAGE_FILLED(v, intersecting_pairs)) j["intersecting_pairs"] = v.intersecting_pairs;
+    if (PLUMAGE_FILLED(v, body_penetrations)) j["body_penetrations"] = v.body_penetrations;
+    if (PLUMAGE_FILLED(v, coverage)) put(j, "coverage", v.coverage);
+    if (PLUMAGE_FILLED(v, mean_pitch_deg)) put(j, "mean_pitch_deg", v.mean_pitch_deg);
+}
+
+// Mean, max or min of `key` over the frames that have it.
+std::optional<double> fold(const json& frames, const char* key, int how) {
+    std::optional<double> acc;
+    size_t n = 0;
+    for (const json& f : frames) {
+        if (!f.contains(key)) continue;
+        const double v = f[key].get<double>();
+        ++n;
+        if (!acc) acc = v;
+        else if (how == 0) *acc += v;
+        else if (how > 0) *acc = std::max(*acc, v);
+        else *acc = std::min(*acc, v);
+    }
+    if (acc && how == 0) *acc /= static_cast<double>(n);
+    return acc;
+}
+
+}  // namespace
+
+double tidy(float v) {
+    if (!std::isfinite(v)) return v;
+    for (int digits = 6; digits <= 9; ++digits) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.*g", digits, static_cast<double>(v));
+        const double d = std::strtod(text, nullptr);
+        if (static_cast<float>(d) == v) return d;
+    }
+    return v;
+}
+
+json config_to_json(const PlumageConfig& c) {
+    json j = {{"sampler", sampler_name(c.sampler)},
+              {"seed", c.seed},
+              {"threads", c.threads},
+              {"mode", mode_name(c.mode)},
+              {"target_feathers", c.target_feathers},
+              {"k_neighbours", c.k_neighbours},
+              {"spacing", tidy(c.spacing)},
+              {"theta_deg", tidy(static_cast<float>(c.theta * 180.0 / 3.14159265358979323846))},
+              {"randomness", tidy(c.randomness)},
+              {"pool_factor", tidy(c.pool_factor)},
+              {"feather_length", tidy(c.feather_length)},
+              {"feather_width", tidy(c.feather_width)},
+              {"feather_thickness", tidy(c.feather_thickness)},
+              {"gamma", tidy(c.gamma)},
+              {"lambda", tidy(c.lambda)},
+              {"height_field_u", c.height_field_u},
+              {"height_field_v", c.height_field_v},
+              {"fluffiness", tidy(c.fluffiness)},
+              {"collision_allowance", tidy(c.collision_allowance)},
+              {"theta_s", tidy(c.theta_s)},
+              {"flow_axis", {tidy(c.flow_axis[0]), tidy(c.flow_axis[1]), tidy(c.flow_axis[2])}},
+              {"recompute_neighbourhoods", c.recompute_neighbourhoods != 0}};
+    return j;
+}
+
+void Report::set_subject(const std::string& input, const std::string& mesh, size_t vertices, size_t triangles, json config) {
+    subject_ = {{"input", input}, {"mesh", mesh}, {"vertices", vertices}, {"triangles", triangles}, {"config", std::move(config)}};
+}
+
+void Report::set_sampling(const std::optional<PlumageSamplingStats>& s) {
+    if (!s) return;
+    sampling_ = json::object();
+    if (PLUMAGE_FILLED(*s, seconds)) put(sampling_, "seconds", s->seconds);
+    if (PLUMAGE_FILLED(*s, relative_radius)) put(sampling_, "relative_radius", tidy(s->relative_radius));
+    if (PLUMAGE_FILLED(*s, coverage_gap)) put(sampling_, "coverage_gap", tidy(s->coverage_gap));
+    if (PLUMAGE_FILLED(*s, alignment)) put(sampling_, "alignment", tidy(s->alignment));
+}
+
+void Report::set_ordering(const std::optional<PlumageOrderingStats>& s) {
+    if (!s) return;
+    ordering_ = json::object();
+    if (PLUMAGE_FILLED(*s, seconds)) put(ordering_, "seconds", s->seconds);
+    if (PLUMAGE_FILLED(*s, pairs)) ordering_["pairs"] = s->pairs;
+    if (PLUMAGE_FILLED(*s, edges)) ordering_["edges"] = s->edges;
+    if (PLUMAGE_FILLED(*s, dropped_edges)) ordering_["dropped_edges"] = s->dropped_edges;
+    if (PLUMAGE_FILLED(*s, violations)) ordering_["violations"] = s->violations;
+}
+
+void Report::set_static(const std::optional<PlumageFrameStats>& s, const std::optional<PlumageValidation>& v) {
+    if (!s && !v) return;
+    static_ = json::object();
+    if (s) {
+        if (PLUMAGE_FILLED(*s, adjust_seconds)) put(static_, "seconds", s->adjust_seconds);
+        if (PLUMAGE_FILLED(*s, collision_tests_per_feather)) put(static_, "collision_tests_per_feather", s->collision_tests_per_feather);
+    }
+    if (v) put_validation(static_, *v);
+}
+
+void Report::add_frame(size_t index, double time, double step_seconds, const std::optional<PlumageFrameStats>& s,
+                       const std::optional<PlumageValidation>& v) {
+    json f = {{"index", index}};
+    put(f, "time", time);
+    if (s) {
+        if (PLUMAGE_FILLED(*s, adjusted)) f["adjusted"] = s->adjusted;
+        if (PLUMAGE_FILLED(*s, collision_tests_per_feather)) put(f, "collision_tests_per_feather", s->collision_tests_per_feather);
+        if (PLUMAGE_FILLED(*s, priority_changes)) f["priority_changes"] = s->priority_changes;
+        if (PLUMAGE_FILLED(*s, reorder_seconds)) put(f, "reorder_seconds", s->reorder_seconds);
+        if (PLUMAGE_FILLED(*s, adjust_seconds)) put(f, "adjust_seconds", s->adjust_seconds);
+    }
+    put(f, "step_seconds", step_seconds);
+    if (v) put_validation(f, *v);
+    frames_.push_back(std::move(f));
+}
+
+json Report::summary() const {
+    json s = {{"frames", frames_.size()}};
+    const auto add = [&](const char* key, const char* field, int how) {
+        const std::optional<double> v = fold(frames_, field, how);
+        if (!v) return;
+        if (how > 0) s[key] = static_cast<uint64_t>(*v);  // a maximum of counts is a count
+        else s[key] = *v;
+    };
+    add("mean_adjusted", "adjusted", 0);
+    add("mean_step_seconds", "step_seconds", 0);
+    add("max_intersecting_pairs", "intersecting_pairs", 1);
+    add("max_body_penetrations", "body_penetrations", 1);
+    add("min_coverage", "coverage", -1);
+    return s;
+}
+
+json Report::to_json() const {
+    json j = {{"schema", 1}};
+    for (const char* key : {"input", "mesh", "vertices", "triangles"}) j[key] = subject_[key];
+    j["feathers"] = feathers_;
+    j["config"] = subject_["config"];
+    if (!sampling_.is_null()) j["sampling"] = sampling_;
+    if (!ordering_.is_null()) j["ordering"] = ordering_;
+    if (!static_.is_null()) j["static"] = static_;
+    j["frames"] = frames_;
+    j["summary"] = summary();
+    j["timing"] = timing_;
+    return j;
+}
+
+void Report::write(const std::string& path) const {
+    std::error_code ec;
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    std::ofstream out(path);
+    out << to_json().dump(2) << '\n';
+    out.close();
+    if (!out) throw OutputError("cannot write " + path);
+}
+
+}  // namespace plumage_host

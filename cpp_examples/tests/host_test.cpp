@@ -1,0 +1,354 @@
+// Runs plumage_gltf as a user would and checks what comes out: exit codes,
+// one-line reasons, the JSON report and the .glb (read back with tinygltf).
+//   host_test HOST_EXE WORK_DIR DATA_DIR SCENARIO
+// Scenarios that need ../shared/data exit 77 (ctest SKIP) when it is absent.
+#include "gltf_fixture.h"
+
+#include <tiny_gltf.h>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+using namespace plumage_test;
+using json = nlohmann::json;
+
+namespace {
+
+constexpr int kSkip = 77;
+
+int g_failures = 0;
+std::string g_host, g_dir, g_data;
+
+void check(bool ok, const std::string& what, int line) {
+    if (!ok) {
+        ++g_failures;
+        std::fprintf(stderr, "FAILED (line %d): %s\n", line, what.c_str());
+    }
+}
+#define CHECK(cond) check((cond), #cond, __LINE__)
+#define CHECK_MSG(cond, msg) check((cond), std::string(#cond) + ": " + (msg), __LINE__)
+
+std::string path(const std::string& name) { return (std::filesystem::path(g_dir) / name).string(); }
+
+std::string slurp(const std::string& file) {
+    std::ifstream in(file, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+struct Run {
+    int exit_code = -1;
+    std::string out;
+    std::string err;
+};
+
+// Runs the host with `args`, capturing stdout and stderr in files.
+Run run_host(const std::vector<std::string>& args) {
+    static int counter = 0;
+    const std::string base = path("run" + std::to_string(++counter));
+    const std::string out_file = base + ".stdout", err_file = base + ".stderr";
+    std::vector<std::string> all{g_host};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid = 0;
+    const int spawned = posix_spawn(&pid, g_host.c_str(), &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    Run r;
+    if (spawned != 0) {
+        r.err = "cannot start " + g_host;
+        return r;
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+    r.out = slurp(out_file);
+    r.err = slurp(err_file);
+    std::string shown;
+    for (const std::string& a : args) shown += " " + a;
+    std::printf("$ plumage_gltf%s\n  exit %d\n%s%s", shown.c_str(), r.exit_code, r.out.c_str(), r.err.c_str());
+    return r;
+}
+
+// A refusal: the expected code and exactly one line on stderr naming the reason.
+void expect_refusal(const Run& r, int code, const std::string& needle, int line) {
+    check(r.exit_code == code, "exit code " + std::to_string(r.exit_code) + ", expected " + std::to_string(code), line);
+    const size_t lines = static_cast<size_t>(std::count(r.err.begin(), r.err.end(), '\n'));
+    check(lines == 1 && r.err.back() == '\n', "one line on stderr, got: " + r.err, line);
+    check(r.err.rfind("plumage_gltf: ", 0) == 0, "the line starts with the program name: " + r.err, line);
+    check(r.err.find(needle) != std::string::npos, "the reason mentions \"" + needle + "\": " + r.err, line);
+}
+#define EXPECT_REFUSAL(run, code, needle) expect_refusal((run), (code), (needle), __LINE__)
+
+bool has_null(const json& j) {
+    if (j.is_null()) return true;
+    if (j.is_object() || j.is_array()) {
+        for (const json& v : j) {
+            if (has_null(v)) return true;
+        }
+    }
+    return false;
+}
+
+// The report's schema: required keys, one entry per frame, optional sections well formed.
+json check_report(const std::string& file, size_t frames) {
+    json r;
+    try {
+        r = json::parse(slurp(file));
+    } catch (const std::exception& e) {
+        check(false, "report parses: " + std::string(e.what()), __LINE__);
+        return r;
+    }
+    CHECK(r.value("schema", 0) == 1);
+    for (const char* key : {"input", "mesh"}) CHECK_MSG(r.contains(key) && r[key].is_string(), key);
+    for (const char* key : {"vertices", "triangles", "feathers"}) CHECK_MSG(r.contains(key) && r[key].is_number_unsigned(), key);
+    CHECK(r.contains("config") && r["config"].is_object());
+    for (const char* key : {"fps", "frames", "mode", "sampler", "seed", "threads", "validate", "flow_axis"}) CHECK_MSG(r["config"].contains(key), key);
+    CHECK(r.contains("frames") && r["frames"].is_array() && r["frames"].size() == frames);
+    for (const json& f : r["frames"]) {
+        for (const char* key : {"index", "time", "step_seconds"}) CHECK_MSG(f.contains(key) && f[key].is_number(), key);
+    }
+    CHECK(r.contains("summary") && r["summary"].value("frames", size_t{99}) == frames);
+    if (frames > 0) CHECK(r["summary"].contains("mean_step_seconds"));
+    for (const char* section : {"sampling", "ordering", "static"}) {
+        if (r.contains(section)) CHECK_MSG(r[section].is_object() && !has_null(r[section]), section);
+    }
+    CHECK(!has_null(r["frames"]) && !has_null(r["summary"]));
+    return r;
+}
+
+// The .glb reads back with tinygltf: a body (and feathers) switching morph targets per frame.
+void check_glb(const std::string& file, size_t frames, const json& report) {
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    const bool ok = loader.LoadBinaryFromFile(&m, &err, &warn, file);
+    CHECK_MSG(ok, err);
+    if (!ok) return;
+    const size_t feathers = report.value("feathers", size_t{0});
+    CHECK(m.meshes.size() == (feathers > 0 ? 2u : 1u));
+    CHECK(!m.meshes.empty() && m.meshes[0].name == "body");
+    for (const tinygltf::Mesh& mesh : m.meshes) {
+        CHECK(mesh.primitives.size() == 1 && mesh.primitives[0].targets.size() == frames);
+    }
+    if (!m.meshes.empty()) {
+        const int pos = m.meshes[0].primitives[0].attributes.at("POSITION");
+        CHECK(m.accessors[static_cast<size_t>(pos)].count == report.value("vertices", size_t{0}));
+    }
+    if (feathers > 0 && m.meshes.size() == 2) {
+        const size_t verts = m.accessors[static_cast<size_t>(m.meshes[1].primitives[0].attributes.at("POSITION"))].count;
+        CHECK(verts == 4 * feathers || verts == 6 * feathers);
+    }
+    if (frames == 0) {
+        CHECK(m.animations.empty());
+        return;
+    }
+    CHECK(m.animations.size() == 1);
+    if (m.animations.size() != 1) return;
+    const tinygltf::Animation& a = m.animations[0];
+    CHECK(a.samplers.size() == 1 && a.samplers[0].interpolation == "STEP");
+    CHECK(m.accessors[static_cast<size_t>(a.samplers[0].input)].count == frames);
+    CHECK(a.channels.size() == m.meshes.size());
+    for (const tinygltf::AnimationChannel& c : a.channels) CHECK(c.target_path == "weights");
+}
+
+// A full run: exit 0, report and .glb checked.
+json dress(const std::string& name, std::vector<std::string> args, size_t frames) {
+    const std::string glb = path(name + ".glb"), report = path(name + ".json");
+    args.insert(args.end(), {"--out", glb, "--report", report});
+    const Run r = run_host(args);
+    CHECK_MSG(r.exit_code == 0, r.err);
+    if (r.exit_code != 0) return json();
+    const json j = check_report(report, frames);
+    check_glb(glb, frames, j);
+    return j;
+}
+
+// ---- scenarios ----------------------------------------------------------
+
+int builtin() {
+    const json r = dress("builtin", {"--frames", "3", "--validate", "every"}, 3);
+    CHECK(r.value("input", "") == "builtin:procedural_body");
+    CHECK(r.value("triangles", 0) > 5000);
+    return 0;
+}
+
+int rest_only() {
+    const json r = dress("rest", {"--frames", "0"}, 0);
+    CHECK(r["config"].value("frames", 99) == 0);
+    return 0;
+}
+
+int model(const std::string& file, const std::string& mesh, size_t vertices) {
+    const std::string input = (std::filesystem::path(g_data) / file).string();
+    if (!std::filesystem::exists(input)) {
+        std::printf("SKIPPED: %s not found (the test models live in ../shared/data; set PLUMAGE_DATA_DIR)\n", input.c_str());
+        return kSkip;
+    }
+    const json r = dress(file, {input, "--frames", "3"}, 3);
+    CHECK_MSG(r.value("mesh", "") == mesh, r.value("mesh", ""));
+    CHECK(r.value("vertices", size_t{0}) == vertices);
+    return 0;
+}
+
+// A small animated morph cube as .gltf with an external .bin.
+GltfFixture cube() {
+    GltfFixture f;
+    std::vector<float> p, d;
+    for (int i = 0; i < 8; ++i) {
+        p.insert(p.end(), {static_cast<float>(i & 1), static_cast<float>((i >> 1) & 1), static_cast<float>((i >> 2) & 1)});
+        d.insert(d.end(), {0, 0.5f * static_cast<float>((i >> 1) & 1), 0});
+    }
+    const int pos = f.floats(p, "VEC3");
+    const int idx = f.u8({0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5}, "SCALAR");
+    f.add("meshes", {{"name", "cube"}, {"primitives", {{{"attributes", {{"POSITION", pos}}}, {"indices", idx}, {"targets", {{{"POSITION", f.floats(d, "VEC3")}}}}}}}});
+    f.single_node_scene(0);
+    const int in = f.floats({0, 1}, "SCALAR"), out = f.floats({0, 1}, "SCALAR");
+    f.add("animations", {{"name", "stretch"},
+                         {"samplers", {{{"input", in}, {"output", out}}}},
+                         {"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}}});
+    return f;
+}
+
+int gltf_input() {
+    cube().write(path("cube.gltf"), GltfFormat::External);
+    const json r = dress("cube_out", {path("cube.gltf"), "--fps", "4"}, 5);  // the whole 1 s clip at 4 fps
+    CHECK(r.value("mesh", "") == "cube" && r.value("vertices", 0) == 8);
+    return 0;
+}
+
+int truncated() {
+    cube().write(path("whole.glb"), GltfFormat::Glb);
+    const std::string bytes = slurp(path("whole.glb"));
+    std::ofstream(path("truncated.glb"), std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    EXPECT_REFUSAL(run_host({path("truncated.glb")}), 3, "truncated.glb");
+    std::ofstream(path("header_only.glb"), std::ios::binary) << bytes.substr(0, 12);
+    EXPECT_REFUSAL(run_host({path("header_only.glb")}), 3, "header_only.glb");
+    return 0;
+}
+
+int not_gltf() {
+    std::ofstream(path("notes.glb")) << "these are not the models you are looking for\n";
+    EXPECT_REFUSAL(run_host({path("notes.glb")}), 3, "not a glTF file");
+    std::ofstream(path("broken.gltf")) << "{\"asset\": {\"version\": \"2.0\"}, \"meshes\": [";
+    EXPECT_REFUSAL(run_host({path("broken.gltf")}), 3, "broken.gltf");
+    return 0;
+}
+
+int missing() {
+    EXPECT_REFUSAL(run_host({path("no_such_model.glb")}), 3, "No such file");
+    return 0;
+}
+
+int unsupported_extension() {
+    GltfFixture f = cube();
+    f.doc()["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+    f.doc()["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+    f.write(path("draco.glb"), GltfFormat::Glb);
+    EXPECT_REFUSAL(run_host({path("draco.glb")}), 3, "KHR_draco_mesh_compression");
+    return 0;
+}
+
+int bad_options() {
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{"--bogus"}, "unknown option"},
+        {{"--frames", "-1"}, "--frames"},
+        {{"--frames", "abc"}, "--frames"},
+        {{"--mode", "fast"}, "incremental|legacy|rebuild"},
+        {{"--sampler", "grid"}, "guided|random"},
+        {{"--validate", "sometimes"}, "every|last|none"},
+        {{"--feathers", "10", "--spacing", "0.5"}, "alternatives"},
+        {{"--fps", "0"}, "--fps"},
+        {{"--flow", "1,2"}, "X,Y,Z"},
+        {{"--theta", "nan"}, "--theta"},
+        {{"a.glb", "b.glb"}, "more than one input"},
+        {{"--out"}, "missing value"},
+        {{"--mesh", "wing"}, "procedural_body"},
+        {{"--animation", "fly"}, "swim"},
+    };
+    for (const auto& c : cases) EXPECT_REFUSAL(run_host(c.first), 2, c.second);
+    return 0;
+}
+
+int unknown_mesh_in_file() {
+    cube().write(path("named.glb"), GltfFormat::Glb);
+    EXPECT_REFUSAL(run_host({path("named.glb"), "--mesh", "wing"}), 2, "0:\"cube\"");
+    EXPECT_REFUSAL(run_host({path("named.glb"), "--animation", "3"}), 2, "0:\"stretch\"");
+    return 0;
+}
+
+int library_error() {
+    // The host passes parameters through; the library refuses out-of-range ones.
+    EXPECT_REFUSAL(run_host({"--threads", "5000", "--frames", "1"}), 4, "INVALID_ARGUMENT");
+    return 0;
+}
+
+int help() {
+    const Run r = run_host({"--help"});
+    CHECK(r.exit_code == 0 && r.out.find("usage: plumage_gltf") != std::string::npos && r.err.empty());
+    return 0;
+}
+
+const std::map<std::string, std::function<int()>> kScenarios = {
+    {"builtin", builtin},
+    {"rest_only", rest_only},
+    {"flamingo", [] { return model("Flamingo.glb", "Mesh_0", 715); }},
+    {"fox", [] { return model("Fox.glb", "Mesh", 1728); }},
+    {"bird", [] { return model("bird.glb", "Plane", 338); }},
+    {"gltf_input", gltf_input},
+    {"truncated", truncated},
+    {"not_gltf", not_gltf},
+    {"missing", missing},
+    {"unsupported_extension", unsupported_extension},
+    {"bad_options", bad_options},
+    {"unknown_mesh_in_file", unknown_mesh_in_file},
+    {"library_error", library_error},
+    {"help", help},
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc == 2 && std::string(argv[1]) == "--list") {
+        for (const auto& s : kScenarios) std::printf("%s\n", s.first.c_str());
+        return 0;
+    }
+    if (argc != 5 || kScenarios.count(argv[4]) == 0) {
+        std::fprintf(stderr, "usage: host_test HOST_EXE WORK_DIR DATA_DIR SCENARIO   (host_test --list)\n");
+        return 2;
+    }
+    g_host = argv[1];
+    g_dir = (std::filesystem::path(argv[2]) / argv[4]).string();
+    g_data = argv[3];
+    std::filesystem::remove_all(g_dir);
+    std::filesystem::create_directories(g_dir);
+    int code = 0;
+    try {
+        code = kScenarios.at(argv[4])();
+    } catch (const std::exception& e) {
+        check(false, std::string("unexpected exception: ") + e.what(), __LINE__);
+    }
+    if (code == kSkip) return kSkip;
+    if (g_failures == 0) std::printf("%s: ok\n", argv[4]);
+    return g_failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,271 @@
+// The .glb writer and the report, on synthetic feathers: the layout of the
+// feather mesh, frames matched by feather id, and figures left out when the
+// library has not computed them.
+//   output_test CASE WORK_DIR
+#include "gltf_writer.h"
+#include "plumage_system.h"
+#include "report.h"
+
+#include <tiny_gltf.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+
+using namespace plumage_host;
+using json = nlohmann::ordered_json;
+
+namespace {
+
+int g_failures = 0;
+std::string g_dir;
+
+void check(bool ok, const std::string& what, int line) {
+    if (!ok) {
+        ++g_failures;
+        std::fprintf(stderr, "FAILED (line %d): %s\n", line, what.c_str());
+    }
+}
+#define CHECK(cond) check((cond), #cond, __LINE__)
+
+std::string path(const std::string& name) { return (std::filesystem::path(g_dir) / name).string(); }
+
+const std::vector<float> kBody{0, 0, 0, 1, 0, 0, 0, 1, 0};
+const std::vector<uint32_t> kBodyIndices{0, 1, 2};
+
+std::vector<PlumageFeather> feathers(const std::vector<uint64_t>& ids) {
+    std::vector<PlumageFeather> out(ids.size());
+    for (size_t i = 0; i < ids.size(); ++i) out[i].id = ids[i];
+    return out;
+}
+
+// Feather f as the library gives it: (root, left, tip) and (root, tip, right), lifted by `lift`.
+std::vector<float> kites(size_t count, float lift, bool degenerate_last = false) {
+    std::vector<float> out;
+    for (size_t f = 0; f < count; ++f) {
+        const float x = static_cast<float>(f) * 2, y = lift;
+        const float tip_x = degenerate_last && f + 1 == count ? x : x + 1;
+        const float root[3] = {x, y, 0}, left[3] = {x + 0.5f, y + 0.25f, 0}, tip[3] = {tip_x, y, 0}, right[3] = {x + 0.5f, y - 0.25f, 0};
+        for (const float* c : {root, left, tip, root, tip, right}) out.insert(out.end(), c, c + 3);
+    }
+    return out;
+}
+
+tinygltf::Model read_back(const std::string& file) {
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    check(loader.LoadBinaryFromFile(&m, &err, &warn, file), "reads back: " + err, __LINE__);
+    return m;
+}
+
+std::vector<float> floats(const tinygltf::Model& m, int accessor) {
+    const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(accessor)];
+    const tinygltf::BufferView& v = m.bufferViews[static_cast<size_t>(a.bufferView)];
+    std::vector<float> out(a.count * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1));
+    std::memcpy(out.data(), m.buffers[0].data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(float));
+    return out;
+}
+
+std::vector<uint32_t> indices(const tinygltf::Model& m, int accessor) {
+    const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(accessor)];
+    const unsigned char* p = m.buffers[0].data.data() + m.bufferViews[static_cast<size_t>(a.bufferView)].byteOffset + a.byteOffset;
+    std::vector<uint32_t> out(a.count);
+    for (size_t i = 0; i < a.count; ++i) {
+        if (a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+            uint16_t v;
+            std::memcpy(&v, p + 2 * i, 2);
+            out[i] = v;
+        } else {
+            std::memcpy(&out[i], p + 4 * i, 4);
+        }
+    }
+    return out;
+}
+
+// The triangle corners of `mesh` at `frame` (-1: the base), as 9 floats per triangle.
+std::vector<float> corners(const tinygltf::Model& m, size_t mesh, int frame) {
+    const tinygltf::Primitive& p = m.meshes[mesh].primitives[0];
+    std::vector<float> pos = floats(m, p.attributes.at("POSITION"));
+    if (frame >= 0) {
+        const std::vector<float> d = floats(m, p.targets[static_cast<size_t>(frame)].at("POSITION"));
+        for (size_t i = 0; i < pos.size(); ++i) pos[i] += d[i];
+    }
+    std::vector<float> out;
+    for (uint32_t i : indices(m, p.indices)) out.insert(out.end(), pos.begin() + 3 * i, pos.begin() + 3 * i + 3);
+    return out;
+}
+
+bool near(const std::vector<float>& a, const std::vector<float>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i) {
+        if (std::fabs(a[i] - b[i]) > 1e-5f) return false;
+    }
+    return true;
+}
+
+size_t vertex_count(const tinygltf::Model& m, size_t mesh) {
+    return m.accessors[static_cast<size_t>(m.meshes[mesh].primitives[0].attributes.at("POSITION"))].count;
+}
+
+// ---- the .glb -----------------------------------------------------------
+
+void glb_four_vertices_per_feather() {
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({10, 11, 12}), kites(3, 0));
+    std::vector<float> moved = kBody;
+    moved[1] = 0.5f;
+    rec.add_frame(0.0, kBody, feathers({10, 11, 12}), kites(3, 1));
+    rec.add_frame(0.5, moved, feathers({10, 11, 12}), kites(3, 2));
+    rec.write_glb(path("four.glb"));
+    const tinygltf::Model m = read_back(path("four.glb"));
+    CHECK(m.meshes.size() == 2 && m.meshes[1].name == "feathers");
+    CHECK(vertex_count(m, 1) == 12);  // root, left, tip, right
+    CHECK(near(corners(m, 1, -1), kites(3, 0)));
+    CHECK(near(corners(m, 1, 0), kites(3, 1)));
+    CHECK(near(corners(m, 1, 1), kites(3, 2)));
+    CHECK(near(corners(m, 0, 1), moved));
+    CHECK(m.animations.size() == 1 && m.animations[0].samplers[0].interpolation == "STEP");
+    const std::vector<float> times = floats(m, m.animations[0].samplers[0].input);
+    const std::vector<float> weights = floats(m, m.animations[0].samplers[0].output);
+    CHECK((times == std::vector<float>{0, 0.5f}));
+    CHECK((weights == std::vector<float>{1, 0, 0, 1}));  // frame k shows target k alone
+}
+
+void glb_six_vertex_fallback() {
+    // A feather whose tip meets its root in one frame breaks the shared corner pattern.
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1, 2}), kites(2, 0));
+    rec.add_frame(0.0, kBody, feathers({1, 2}), kites(2, 1, true));
+    rec.write_glb(path("six.glb"));
+    const tinygltf::Model m = read_back(path("six.glb"));
+    CHECK(vertex_count(m, 1) == 12);
+    CHECK(near(corners(m, 1, 0), kites(2, 1, true)));
+}
+
+void glb_feathers_matched_by_id() {
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
+    // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
+    std::vector<float> reversed;
+    const std::vector<float> lifted = kites(3, 1);
+    for (size_t f = 3; f-- > 0;) reversed.insert(reversed.end(), lifted.begin() + static_cast<long>(18 * f), lifted.begin() + static_cast<long>(18 * f + 18));
+    const std::vector<float> extra = kites(1, 40);
+    reversed.insert(reversed.end(), extra.begin(), extra.end());
+    rec.add_frame(0.0, kBody, feathers({9, 8, 7, 99}), reversed);
+    // Frame 1 lacks feather 8: it keeps its last pose.
+    std::vector<float> partial = kites(3, 2);
+    partial.erase(partial.begin() + 18, partial.begin() + 36);
+    rec.add_frame(1.0, kBody, feathers({7, 9}), partial);
+    CHECK(rec.untracked_feathers() == 1);
+    rec.write_glb(path("by_id.glb"));
+    const tinygltf::Model m = read_back(path("by_id.glb"));
+    CHECK(near(corners(m, 1, 0), lifted));
+    std::vector<float> expected = kites(3, 2);
+    std::copy(lifted.begin() + 18, lifted.begin() + 36, expected.begin() + 18);
+    CHECK(near(corners(m, 1, 1), expected));
+}
+
+void glb_rest_only() {
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    rec.write_glb(path("sub/dir/rest.glb"));  // parent directories are created
+    const tinygltf::Model m = read_back(path("sub/dir/rest.glb"));
+    CHECK(m.animations.empty() && m.meshes.size() == 2 && m.meshes[1].primitives[0].targets.empty());
+    AnimationRecorder bare(kBody, kBodyIndices, {}, {});
+    bare.write_glb(path("bare.glb"));
+    CHECK(read_back(path("bare.glb")).meshes.size() == 1);  // no feathers, no feather mesh
+}
+
+// ---- the report ---------------------------------------------------------
+
+Report subject() {
+    Report r;
+    PlumageConfig cfg;
+    plumage_config_init(&cfg);
+    r.set_subject("in.glb", "body", 3, 1, config_to_json(cfg));
+    return r;
+}
+
+void report_leaves_out_missing_figures() {
+    Report r = subject();
+    r.set_sampling(std::nullopt);
+    r.set_ordering(std::nullopt);
+    r.set_static(std::nullopt, std::nullopt);
+    r.add_frame(0, 0.0, 0.001, std::nullopt, std::nullopt);
+    const json j = r.to_json();
+    std::vector<std::string> keys;
+    for (auto it = j.begin(); it != j.end(); ++it) keys.push_back(it.key());
+    CHECK((keys == std::vector<std::string>{"schema", "input", "mesh", "vertices", "triangles", "feathers", "config", "frames", "summary", "timing"}));
+    CHECK(j["frames"][0].size() == 3);  // index, time, step_seconds
+    CHECK(j["summary"].size() == 2);    // frames, mean_step_seconds
+    CHECK(j["config"]["theta_deg"] == 45.0 && j["config"]["mode"] == "incremental");
+}
+
+void report_partial_struct() {
+    // An older library fills only the fields it knows: the rest is left out.
+    Report r = subject();
+    PlumageFrameStats s{};
+    s.adjusted = 5;
+    s.collision_tests_per_feather = 3;
+    s.struct_size = static_cast<uint32_t>(offsetof(PlumageFrameStats, adjusted) + sizeof s.adjusted);
+    PlumageValidation v{};
+    v.intersecting_pairs = 2;
+    v.body_penetrations = 1;
+    v.coverage = 0.5;
+    v.struct_size = static_cast<uint32_t>(offsetof(PlumageValidation, body_penetrations) + sizeof v.body_penetrations);
+    r.add_frame(0, 0.0, 0.001, s, v);
+    const json f = r.to_json()["frames"][0];
+    CHECK(f["adjusted"] == 5 && !f.contains("collision_tests_per_feather") && !f.contains("priority_changes"));
+    CHECK(f["intersecting_pairs"] == 2 && f["body_penetrations"] == 1 && !f.contains("coverage"));
+}
+
+void report_summary() {
+    Report r = subject();
+    for (int k = 0; k < 2; ++k) {
+        PlumageFrameStats s{};
+        s.struct_size = sizeof s;
+        s.adjusted = static_cast<uint64_t>(2 + 2 * k);
+        PlumageValidation v{};
+        v.struct_size = sizeof v;
+        v.intersecting_pairs = static_cast<uint64_t>(1 + 4 * k);
+        v.coverage = 0.9 - 0.1 * k;
+        v.mean_pitch_deg = std::nan("");  // not JSON: left out
+        r.add_frame(static_cast<size_t>(k), k / 30.0, 0.002, s, v);
+    }
+    const json sum = r.to_json()["summary"];
+    CHECK(sum["frames"] == 2 && sum["mean_adjusted"] == 3.0 && sum["max_intersecting_pairs"] == 5);
+    CHECK(std::fabs(sum["min_coverage"].get<double>() - 0.8) < 1e-12 && std::fabs(sum["mean_step_seconds"].get<double>() - 0.002) < 1e-12);
+    CHECK(!r.to_json()["frames"][0].contains("mean_pitch_deg"));
+    CHECK(tidy(0.1f) == 0.1 && tidy(0.6f) == 0.6);
+}
+
+const std::map<std::string, std::function<void()>> kCases = {
+    {"glb_four_vertices_per_feather", glb_four_vertices_per_feather},
+    {"glb_six_vertex_fallback", glb_six_vertex_fallback},
+    {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
+    {"glb_rest_only", glb_rest_only},
+    {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
+    {"report_partial_struct", report_partial_struct},
+    {"report_summary", report_summary},
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 3 || kCases.count(argv[1]) == 0) {
+        std::fprintf(stderr, "usage: output_test CASE WORK_DIR\n");
+        return 2;
+    }
+    g_dir = (std::filesystem::path(argv[2]) / argv[1]).string();
+    std::filesystem::remove_all(g_dir);
+    std::filesystem::create_directories(g_dir);
+    try {
+        kCases.at(argv[1])();
+    } catch (const std::exception& e) {
+        check(false, std::string("unexpected exception: ") + e.what(), __LINE__);
+    }
+    if (g_failures == 0) std::printf("%s: ok\n", argv[1]);
+    return g_failures == 0 ? 0 : 1;
+}
