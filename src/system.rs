@@ -8,6 +8,7 @@ use crate::coat::{Coat, Dressing, Workspace};
 use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
+use crate::error::{Error, ErrorKind};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::ordering::NeighbourParams;
@@ -302,28 +303,45 @@ impl System {
 }
 
 /// Saved state: save a frame, resume from it (see [`crate::snapshot`] for
-/// the blob's header and checksum, [`Coat::write_state`] for its payload).
+/// the blob's header and checksum). The payload is the coat
+/// ([`Coat::write_state`]), then the flags of [`System::readjusted`] (u64
+/// count, one byte 0 or 1 per feather): a per-frame report the adjuster's
+/// workspace keeps.
 impl System {
     /// The state of the current frame as a self-contained blob: resuming
     /// from it with [`System::load_state`] gives byte-identical later frames.
-    /// Only the coat is stored; what never changes after creation is
-    /// identified by the blob's fingerprint.
+    /// Only the per-frame state is stored; what never changes after
+    /// creation is identified by the blob's fingerprint.
     pub fn save_state(&self) -> Vec<u8> {
         let mut w = Writer::new(self.state_fingerprint());
         self.coat.write_state(&mut w);
+        let readjusted = self.readjusted();
+        w.u64(readjusted.len() as u64);
+        readjusted.iter().for_each(|&f| w.u8(u8::from(f)));
         w.finish()
     }
 
-    /// Resumes from a blob of [`System::save_state`]. A truncated, corrupt
-    /// or foreign blob (another mesh, roots or configuration) is refused
-    /// with `InvalidState` and nothing changes: the blob is parsed and
-    /// checked in full before it replaces the current frame.
+    /// Resumes from a blob of [`System::save_state`]: the feathers, reports
+    /// and frame count become those of the saved frame. A truncated,
+    /// corrupt or foreign blob (another mesh, roots or configuration) is
+    /// refused with `InvalidState` and nothing changes: the blob is parsed
+    /// and checked in full before it replaces the current frame.
     pub fn load_state(&mut self, blob: &[u8]) -> Result<()> {
         let mut reader = Reader::open(blob, self.state_fingerprint())?;
         let dressing = &self.dressing;
         let coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
+        let n = reader.len(1, Some(dressing.len()))?;
+        let mut readjusted = Vec::with_capacity(n);
+        for _ in 0..n {
+            match reader.u8()? {
+                0 => readjusted.push(false),
+                1 => readjusted.push(true),
+                _ => return Err(Error::new(ErrorKind::InvalidState, "a saved readjustment flag is not 0 or 1")),
+            }
+        }
         reader.finish()?;
         self.coat = coat;
+        self.work.adjuster.set_adjusted(&readjusted);
         self.export();
         Ok(())
     }

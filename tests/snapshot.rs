@@ -69,11 +69,12 @@ fn frame(rest: &[f32], k: usize) -> Vec<f32> {
 }
 
 /// What a host sees after a call: the feathers and their triangles as
-/// bytes, the frame and ordering reports without their timings, and the
-/// frame count.
+/// bytes, which feathers were readjusted, the frame and ordering reports
+/// without their timings, and the frame count.
 #[derive(Clone, Debug, PartialEq)]
 struct Observed {
     bytes: Vec<u8>,
+    readjusted: Vec<bool>,
     frame: FrameReport,
     ordering: OrderingReport,
     frames_stepped: u64,
@@ -91,7 +92,7 @@ fn observe(sys: &System) -> Observed {
     let frame =
         FrameReport { reorder_seconds: 0.0, adjust_seconds: 0.0, step_seconds: 0.0, ..sys.frame_report().unwrap() };
     let ordering = OrderingReport { seconds: 0.0, ..sys.ordering_report().unwrap() };
-    Observed { bytes, frame, ordering, frames_stepped: sys.frames_stepped() }
+    Observed { bytes, readjusted: sys.readjusted().to_vec(), frame, ordering, frames_stepped: sys.frames_stepped() }
 }
 
 fn create(shape: &Shape, config: &Config) -> System {
