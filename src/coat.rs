@@ -176,7 +176,7 @@ impl Coat {
         progress.check(Phase::Adjusting, 0.0)?;
         self.body.rebuild(&self.positions, &dressing.triangles);
         let (offsets, indices) = self.neighbourhoods.obstacle_csr();
-        let stats = work.adjuster.adjust_in_order(
+        let stats = work.adjuster.adjust_in_order_until(
             &self.frames,
             &dressing.shapes,
             &mut self.poses,
@@ -187,8 +187,11 @@ impl Coat {
             &dressing.adjust_params,
             AdjustSteps::Full,
             Selection::All,
+            &|done| progress.check(Phase::Adjusting, done).is_ok(),
         );
+        // A stopped adjustment (None) has set the progress's stop flag.
         progress.check(Phase::Adjusting, 1.0)?;
+        let stats = stats.unwrap_or_default();
         self.frame_report = FrameReport {
             frame_index: self.frame_index,
             adjusted: stats.adjusted,

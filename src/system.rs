@@ -15,7 +15,7 @@ use crate::ordering::NeighbourParams;
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
 use crate::rng::hash64;
-use crate::sampling::sample_roots;
+use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
@@ -73,7 +73,7 @@ impl System {
             config,
         )?;
         progress.check(Phase::Sampling, 0.0)?;
-        let sampling = pool.install(|| sample_roots(&welded, &surface, &fields, config))?;
+        let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
         progress.check(Phase::Sampling, 1.0)?;
         let shapes = Dressing::shapes_for(&sampling.roots, config);
         let dressing = Dressing {

@@ -126,3 +126,90 @@ fn a_frame_with_the_wrong_vertex_count_or_nan_changes_nothing() {
     assert_eq!(feather_bytes(&sys), before);
     assert_eq!(sys.frames_stepped(), 0);
 }
+
+mod interruption {
+    use super::*;
+    use plumage::progress::{Phase, Progress, ProgressSink};
+    use std::sync::Mutex;
+
+    /// Records every report; asks to stop after `allow` of them.
+    struct Recorder {
+        seen: Mutex<Vec<(Phase, f32)>>,
+        allow: usize,
+    }
+
+    impl ProgressSink for Recorder {
+        fn report(&self, phase: Phase, fraction: f32) -> bool {
+            let mut seen = self.seen.lock().unwrap();
+            seen.push((phase, fraction));
+            seen.len() <= self.allow
+        }
+    }
+
+    fn plate() -> common::shapes::Shape {
+        grid(12.0, 12.0, 48, 48, 0.0, true)
+    }
+
+    fn wave(shape: &common::shapes::Shape, t: f32) -> Vec<f32> {
+        shape.positions.chunks(3).flat_map(|p| [p[0], p[1], 0.5 * (0.7 * p[0] + t).sin()]).collect()
+    }
+
+    #[test]
+    fn progress_is_reported_inside_sampling_and_adjustment() {
+        let shape = plate();
+        let cfg = Config { target_feathers: 4000, threads: 1, ..Config::default() };
+        let rec = Recorder { seen: Mutex::new(Vec::new()), allow: usize::MAX };
+        System::new_with_progress(&cfg, &MeshInput::new(&shape.positions, &shape.indices), &Progress::to(&rec))
+            .unwrap();
+        let seen = rec.seen.lock().unwrap();
+        let inside = |phase: Phase| seen.iter().filter(|(p, f)| *p == phase && *f > 0.0 && *f < 1.0).count();
+        println!(
+            "reports: {} in all, {} inside sampling, {} inside adjusting",
+            seen.len(),
+            inside(Phase::Sampling),
+            inside(Phase::Adjusting)
+        );
+        assert!(inside(Phase::Sampling) >= 3, "sampling reports from inside its loop");
+        assert!(inside(Phase::Adjusting) >= 3, "adjustment reports from inside its levels");
+        assert!(seen.iter().all(|(_, f)| (0.0..=1.0).contains(f)));
+    }
+
+    #[test]
+    fn a_step_stopped_anywhere_leaves_the_system_as_it_was() {
+        let shape = plate();
+        let cfg = Config { target_feathers: 1500, threads: 2, ..Config::default() };
+        let mesh = MeshInput::new(&shape.positions, &shape.indices);
+        let mut twin = System::new(&cfg, &mesh).unwrap();
+        twin.step(&wave(&shape, 0.5)).unwrap();
+        let mut stopped_somewhere = 0;
+        for allow in [0, 1, 2, 4, 8, 16, 32, 64] {
+            let mut sys = System::new(&cfg, &mesh).unwrap();
+            let before = feather_bytes(&sys);
+            let rec = Recorder { seen: Mutex::new(Vec::new()), allow };
+            match sys.step_with_progress(&wave(&shape, 0.5), &Progress::to(&rec)) {
+                Err(e) => {
+                    assert_eq!(e.kind(), ErrorKind::Interrupted);
+                    assert_eq!(feather_bytes(&sys), before, "stopped after {allow} reports: unchanged");
+                    assert_eq!(sys.frames_stepped(), 0);
+                    stopped_somewhere += 1;
+                    sys.step(&wave(&shape, 0.5)).unwrap();
+                }
+                Ok(()) => {}
+            }
+            assert_eq!(feather_bytes(&sys), feather_bytes(&twin), "after {allow}: the same as never stopped");
+        }
+        assert!(stopped_somewhere >= 3, "the step was stopped at several points ({stopped_somewhere})");
+    }
+
+    #[test]
+    fn a_stopped_create_creates_nothing() {
+        let shape = plate();
+        let cfg = Config { target_feathers: 1500, threads: 1, ..Config::default() };
+        for allow in [0, 3, 20] {
+            let rec = Recorder { seen: Mutex::new(Vec::new()), allow };
+            let r =
+                System::new_with_progress(&cfg, &MeshInput::new(&shape.positions, &shape.indices), &Progress::to(&rec));
+            assert_eq!(r.unwrap_err().kind(), ErrorKind::Interrupted, "stopped after {allow} reports");
+        }
+    }
+}

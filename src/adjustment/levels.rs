@@ -149,6 +149,7 @@ impl Adjuster {
     ///
     /// Panics if the slices disagree in length.
     #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)]
     pub fn adjust_in_order(
         &mut self,
         frames: &[RootFrame],
@@ -162,6 +163,40 @@ impl Adjuster {
         steps: AdjustSteps,
         selection: Selection<'_>,
     ) -> AdjustStats {
+        let all = self.adjust_in_order_until(
+            frames,
+            shapes,
+            poses,
+            order,
+            rank,
+            candidates,
+            body,
+            params,
+            steps,
+            selection,
+            &|_| true,
+        );
+        all.unwrap_or_default()
+    }
+
+    /// As [`Adjuster::adjust_in_order`], asking `keep_going(fraction done)`
+    /// before each level; `None` when it says stop (then `poses` holds a
+    /// mix of old and new poses and the caller must restore them).
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_in_order_until(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
         let start = Instant::now();
         let n = frames.len();
         assert!(
@@ -186,6 +221,9 @@ impl Adjuster {
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
         let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
         for l in 0..levels {
+            if !keep_going(l as f32 / levels.max(1) as f32) {
+                return None;
+            }
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
             run_level(&inputs, items, poses, &self.triangles, &self.moved, outcomes, &mut self.workers);
@@ -206,7 +244,7 @@ impl Adjuster {
             }
         }
         stats.seconds = start.elapsed().as_secs_f64();
-        stats
+        Some(stats)
     }
 
     /// Every feather's triangles at its current pose.

@@ -89,9 +89,9 @@ pub fn step_coat(
     let steps = if dressing.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let stats = if n == 0 {
-        Default::default()
+        Some(Default::default())
     } else {
-        work.adjuster.adjust_in_order(
+        work.adjuster.adjust_in_order_until(
             &coat.frames,
             &dressing.shapes,
             &mut coat.poses,
@@ -102,9 +102,12 @@ pub fn step_coat(
             &dressing.adjust_params,
             steps,
             Selection::Propagate { seeds: &step.seeds, threshold: dressing.theta_s },
+            &|done| progress.check(Phase::Adjusting, done).is_ok(),
         )
     };
+    // A stopped adjustment (None) has set the progress's stop flag.
     progress.check(Phase::Adjusting, 1.0)?;
+    let stats = stats.unwrap_or_default();
     report.adjusted = stats.adjusted;
     report.collision_tests = stats.collision_tests;
     report.clamped = stats.clamped;

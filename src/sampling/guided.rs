@@ -40,6 +40,9 @@ pub(crate) fn sample_guided(disk: &mut DiskSampler<'_>, fields: &Fields, theta: 
     // The lattice site `current` was snapped from; `None` after a jump.
     let mut anchor: Option<SurfacePoint> = None;
     loop {
+        if disk.should_stop() {
+            break;
+        }
         if disk.conflicts(current) {
             disk.discard(current);
             match restart(disk, fields, &anchors, theta, rng) {

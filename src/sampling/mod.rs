@@ -28,6 +28,7 @@ use crate::config::{Config, SamplerKind};
 use crate::error::{Error, ErrorKind, Result};
 use crate::field::Fields;
 use crate::mesh::WeldedMesh;
+use crate::progress::{Phase, Progress};
 use crate::rng::Rng;
 use crate::roots::{RootBinding, edge_basis_coordinates, root_id};
 use crate::surface::Surface;
@@ -71,6 +72,18 @@ pub struct Sampling {
 /// Plants roots on the welded rest mesh with the sampler, spacing or target
 /// count, and seed of `config` (see the module notes).
 pub fn sample_roots(mesh: &WeldedMesh, surface: &Surface, fields: &Fields, config: &Config) -> Result<Sampling> {
+    sample_roots_with_progress(mesh, surface, fields, config, &Progress::none())
+}
+
+/// As [`sample_roots`], checking in with `progress` every few dozen
+/// samples; fails with `Interrupted` when it says stop.
+pub fn sample_roots_with_progress(
+    mesh: &WeldedMesh,
+    surface: &Surface,
+    fields: &Fields,
+    config: &Config,
+    progress: &Progress,
+) -> Result<Sampling> {
     config.validate()?;
     if surface.face_count() != mesh.triangles.len()
         || surface.vertex_count() != mesh.positions.len()
@@ -88,11 +101,13 @@ pub fn sample_roots(mesh: &WeldedMesh, surface: &Surface, fields: &Fields, confi
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
         (if config.spacing > 0.0 { config.spacing } else { nominal }, None, Vec::new())
     } else if config.spacing > 0.0 {
-        let (pool, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing);
+        let (pool, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing, progress);
         (config.spacing, Some(pool), samples)
     } else {
-        search_spacing(&density, surface, positions, fields, config, target)
+        search_spacing(&density, surface, positions, fields, config, target, progress)
     };
+    // A pass cut short by the progress has set its stop flag.
+    progress.check(Phase::Sampling, 0.9)?;
     let roots = match &pool {
         Some(pool) => bind_roots(surface, positions, fields, pool, &samples, config.seed),
         None => Vec::new(),
@@ -111,6 +126,7 @@ fn sampling_pass(
     fields: &Fields,
     config: &Config,
     d: f32,
+    progress: &Progress,
 ) -> (SortedPool, Vec<u32>) {
     let expected = density.effective_area() / (d as f64 * d as f64);
     // Pool size = pool_factor × expected root count.
@@ -120,7 +136,8 @@ fn sampling_pass(
     // Cells of about d: a query of radius 2d then reads little beyond the ball.
     let cell = d * fields.median_spacing_scale();
     let pool = SortedPool::new(drawn, cell);
-    let mut disk = DiskSampler::new(surface, positions, &pool, cell);
+    let keep_going = || progress.check(Phase::Sampling, 0.5).is_ok();
+    let mut disk = DiskSampler::new(surface, positions, &pool, cell).with_keep_going(&keep_going);
     let mut rng = Rng::for_stream(config.seed, SAMPLER_STREAM);
     match config.sampler {
         SamplerKind::Guided => guided::sample_guided(&mut disk, fields, config.theta, config.randomness, &mut rng),
@@ -139,6 +156,7 @@ fn search_spacing(
     fields: &Fields,
     config: &Config,
     target: usize,
+    progress: &Progress,
 ) -> (f32, Option<SortedPool>, Vec<u32>) {
     let packing = match config.sampler {
         SamplerKind::Guided => GUIDED_PACKING,
@@ -148,7 +166,10 @@ fn search_spacing(
     let mut best: Option<(f64, f32, SortedPool, Vec<u32>)> = None;
     let mut previous: Option<(f64, f64)> = None;
     for _ in 0..SEARCH_PASSES {
-        let (pool, samples) = sampling_pass(density, surface, positions, fields, config, d);
+        let (pool, samples) = sampling_pass(density, surface, positions, fields, config, d, progress);
+        if progress.check(Phase::Sampling, 0.5).is_err() {
+            return (d, Some(pool), samples);
+        }
         let n = samples.len();
         let error = (n as f64 / target as f64 - 1.0).abs();
         let done = error <= SEARCH_TOLERANCE;

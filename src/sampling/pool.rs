@@ -229,9 +229,32 @@ pub(crate) struct DiskSampler<'a> {
     /// Points with a spacing above this are checked against the samples
     /// before placement (see [`DiskSampler::conflicts`]).
     check_above: f32,
+    /// Asked every few steps whether to go on (interruption).
+    keep_going: Option<&'a dyn Fn() -> bool>,
+    steps_since_check: u32,
+    stopped: bool,
 }
 
 impl<'a> DiskSampler<'a> {
+    /// Sets the interruption check, polled by [`DiskSampler::should_stop`].
+    pub(crate) fn with_keep_going(mut self, keep_going: &'a dyn Fn() -> bool) -> Self {
+        self.keep_going = Some(keep_going);
+        self
+    }
+
+    /// Whether the sampler loop must stop now: asks the check every 64 calls.
+    pub(crate) fn should_stop(&mut self) -> bool {
+        if self.stopped {
+            return true;
+        }
+        self.steps_since_check += 1;
+        if self.steps_since_check >= 64 {
+            self.steps_since_check = 0;
+            self.stopped = self.keep_going.is_some_and(|f| !f());
+        }
+        self.stopped
+    }
+
     /// Sets up the state over `pool`; `cell` is the sample grid's cell size.
     pub(crate) fn new(surface: &'a Surface, positions: &'a [Vec3], pool: &'a SortedPool, cell: f32) -> Self {
         let min_spacing = pool.points.iter().map(|p| p.spacing).fold(f32::INFINITY, f32::min);
@@ -246,6 +269,9 @@ impl<'a> DiskSampler<'a> {
             patch: NearbyPatch::new(surface),
             check_patch: NearbyPatch::new(surface),
             check_above: 2.0 * min_spacing,
+            keep_going: None,
+            steps_since_check: 0,
+            stopped: false,
         }
     }
 

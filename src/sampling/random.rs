@@ -10,6 +10,9 @@ use super::pool::DiskSampler;
 pub(crate) fn sample_random(disk: &mut DiskSampler<'_>, slots: &[u32]) {
     let mut scratch = Vec::new();
     for &j in slots {
+        if disk.should_stop() {
+            break;
+        }
         if !disk.is_alive(j) {
             continue;
         }
