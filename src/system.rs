@@ -283,13 +283,14 @@ impl System {
         update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
-        let backup = progress.is_interruptible().then(|| self.coat.clone());
+        let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
         let result = update(self, progress);
         match result {
             Ok(()) => self.export(),
             Err(_) => {
-                if let Some(b) = backup {
-                    self.coat = b;
+                if let Some((coat, readjusted)) = backup {
+                    self.coat = coat;
+                    self.work.adjuster.set_adjusted(&readjusted);
                 }
             }
         }
