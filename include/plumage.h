@@ -692,6 +692,35 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
 uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct PlumageValidation *out);
 
 /**
+ * Saves the current frame (what the last successful create, step,
+ * evaluate or load left) as a byte blob, so that a later
+ * `plumage_system_load_state` resumes from it: the frames stepped after a
+ * load are byte-identical to those stepped after the save. Copy-out
+ * convention in bytes: `*out_len` receives the blob's size; a NULL or too
+ * small `buf` gives PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing
+ * else, so call once with NULL to learn the size. The blob is versioned
+ * and checksummed, and only a system created from the same mesh,
+ * per-vertex attributes and configuration accepts it (the thread count
+ * may differ).
+ */
+uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
+                                   uint8_t *buf,
+                                   size_t capacity,
+                                   size_t *out_len);
+
+/**
+ * Resumes from a blob of `len` bytes written by
+ * `plumage_system_save_state`: the feathers, reports and frame count
+ * become those of the saved frame, and later steps continue exactly as
+ * they did after the save. A NULL `blob` gives PLUMAGE_STATUS_NULL_POINTER;
+ * a truncated, corrupt or foreign blob (from a system with another mesh,
+ * roots or configuration, or of another format version) gives
+ * PLUMAGE_STATUS_INVALID_STATE. On any error the system is exactly as it
+ * was. The blob is only read during the call.
+ */
+uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blob, size_t len);
+
+/**
  * Copies the message of the last failed call on `sys` into `buf` (at most
  * `capacity` bytes, always NUL-terminated when `capacity > 0`) and returns
  * the size needed including the NUL. `buf` may be NULL to ask the size.

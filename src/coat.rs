@@ -7,11 +7,13 @@
 use crate::adjustment::{AdjustParams, AdjustSteps, Adjuster, CandidateLists, Selection};
 use crate::body::BodyIndex;
 use crate::error::Result;
+use crate::error::{Error, ErrorKind};
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::ordering::{NeighbourParams, Neighbourhoods, Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
 use crate::roots::{RootBinding, pose_roots};
+use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
 use crate::surface::Surface;
 use crate::{Config, Mode};
@@ -240,4 +242,129 @@ impl Coat {
             });
         }
     }
+}
+
+/// Saved state (see [`crate::snapshot`]): what determines every later
+/// frame. Root frames, vertex normals and the body index are functions of
+/// the positions, so they are recomputed on load rather than stored.
+///
+/// Layout: frame index (u64); welded positions (u64 count, then xyz f32
+/// each); poses (u64 count, then pitch and roll f32 each); the ordering
+/// report (four u64 counts, seconds f64); the frame report (frame index and
+/// nine counts as u64, three timings f64); the neighbourhoods
+/// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]).
+impl Coat {
+    /// Appends the coat's state to a state blob.
+    pub fn write_state(&self, w: &mut Writer) {
+        w.u64(self.frame_index);
+        w.u64(3 * self.positions.len() as u64);
+        for p in &self.positions {
+            p.to_array().iter().for_each(|&x| w.f32(x));
+        }
+        w.u64(2 * self.poses.len() as u64);
+        for pose in &self.poses {
+            w.f32(pose.pitch);
+            w.f32(pose.roll);
+        }
+        // Destructured in full (as in `read_state`) so that a new report
+        // field cannot be forgotten here.
+        let OrderingReport { pairs, edges, dropped_edges, violations, seconds } = self.ordering_report;
+        [pairs, edges, dropped_edges, violations].iter().for_each(|&c| w.u64(c as u64));
+        w.f64(seconds);
+        let FrameReport {
+            frame_index,
+            adjusted,
+            deformed,
+            seeds,
+            collision_tests,
+            priority_changes,
+            reversals,
+            reversals_refused,
+            cycles_broken,
+            clamped,
+            reorder_seconds,
+            adjust_seconds,
+            step_seconds,
+        } = self.frame_report;
+        w.u64(frame_index);
+        [adjusted, deformed, seeds].iter().for_each(|&c| w.u64(c as u64));
+        w.u64(collision_tests);
+        [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
+        [reorder_seconds, adjust_seconds, step_seconds].iter().for_each(|&s| w.f64(s));
+        self.neighbourhoods.write_state(w);
+        self.order.write_state(w);
+    }
+
+    /// Reads a coat written by [`write_state`](Self::write_state) for
+    /// `dressing`, then recomputes the root frames, normals and body index
+    /// from the positions (runs on the current rayon pool). Refuses with
+    /// `InvalidState` a coat of another size, non-finite positions, poses
+    /// outside the adjustment's limits, counts that do not fit, invalid
+    /// neighbourhoods or order (see their `read_state`), or an order whose
+    /// pair set is not the neighbourhoods'.
+    pub fn read_state(r: &mut Reader<'_>, dressing: &Dressing) -> Result<Self> {
+        let n = dressing.len();
+        let frame_index = r.u64()?;
+        r.len(4, Some(3 * dressing.surface.vertex_count()))?;
+        let mut positions = Vec::with_capacity(dressing.surface.vertex_count());
+        for _ in 0..dressing.surface.vertex_count() {
+            let p = Vec3::new(r.f32()?, r.f32()?, r.f32()?);
+            if !p.is_finite() {
+                return Err(invalid_state("saved positions are not finite"));
+            }
+            positions.push(p);
+        }
+        r.len(4, Some(2 * n))?;
+        let limits = &dressing.adjust_params;
+        let mut poses = Vec::with_capacity(n);
+        for _ in 0..n {
+            let pose = FeatherPose::new(r.f32()?, r.f32()?);
+            if !(pose.pitch >= limits.min_pitch && pose.pitch <= limits.max_pitch && pose.roll.abs() <= limits.max_roll)
+            {
+                return Err(invalid_state("a saved feather pose lies outside the pitch and roll limits"));
+            }
+            poses.push(pose);
+        }
+        let ordering_report = OrderingReport {
+            pairs: count(r)?,
+            edges: count(r)?,
+            dropped_edges: count(r)?,
+            violations: count(r)?,
+            seconds: r.f64()?,
+        };
+        let frame_report = FrameReport {
+            frame_index: r.u64()?,
+            adjusted: count(r)?,
+            deformed: count(r)?,
+            seeds: count(r)?,
+            collision_tests: r.u64()?,
+            priority_changes: count(r)?,
+            reversals: count(r)?,
+            reversals_refused: count(r)?,
+            cycles_broken: count(r)?,
+            clamped: count(r)?,
+            reorder_seconds: r.f64()?,
+            adjust_seconds: r.f64()?,
+            step_seconds: r.f64()?,
+        };
+        let neighbourhoods = Neighbourhoods::read_state(r, n)?;
+        let order = PriorityOrder::read_state(r, n)?;
+        if order.pairs() != neighbourhoods.pairs() {
+            return Err(invalid_state("the saved order's pairs are not the saved neighbourhoods' pairs"));
+        }
+        let mut coat =
+            Coat { poses, neighbourhoods, order, frame_index, ordering_report, frame_report, ..Coat::default() };
+        coat.pose(dressing, &positions);
+        coat.body.rebuild(&coat.positions, &dressing.triangles);
+        Ok(coat)
+    }
+}
+
+/// A count stored as u64 that must fit a `usize`.
+fn count(r: &mut Reader<'_>) -> Result<usize> {
+    usize::try_from(r.u64()?).map_err(|_| invalid_state("a saved count does not fit this platform"))
+}
+
+fn invalid_state(message: &str) -> Error {
+    Error::new(ErrorKind::InvalidState, message)
 }

@@ -5,14 +5,18 @@
 use crate::adjustment::AdjustParams;
 use crate::animation::step::{StepWorkspace, step_coat};
 use crate::coat::{Coat, Dressing, Workspace};
+use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
+use crate::error::{Error, ErrorKind};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::ordering::NeighbourParams;
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
+use crate::rng::hash64;
 use crate::sampling::sample_roots_with_progress;
+use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
 use crate::validation::validate;
@@ -279,13 +283,14 @@ impl System {
         update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
-        let backup = progress.is_interruptible().then(|| self.coat.clone());
+        let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
         let result = update(self, progress);
         match result {
             Ok(()) => self.export(),
             Err(_) => {
-                if let Some(b) = backup {
-                    self.coat = b;
+                if let Some((coat, readjusted)) = backup {
+                    self.coat = coat;
+                    self.work.adjuster.set_adjusted(&readjusted);
                 }
             }
         }
@@ -295,5 +300,136 @@ impl System {
     fn export(&mut self) {
         let Self { coat, dressing, records, triangles, .. } = self;
         coat.export(dressing, records, triangles);
+    }
+}
+
+/// Saved state: save a frame, resume from it (see [`crate::snapshot`] for
+/// the blob's header and checksum). The payload is the coat
+/// ([`Coat::write_state`]), then the flags of [`System::readjusted`] (u64
+/// count, one byte 0 or 1 per feather): a per-frame report the adjuster's
+/// workspace keeps.
+impl System {
+    /// The state of the current frame as a self-contained blob: resuming
+    /// from it with [`System::load_state`] gives byte-identical later frames.
+    /// Only the per-frame state is stored; what never changes after
+    /// creation is identified by the blob's fingerprint.
+    pub fn save_state(&self) -> Vec<u8> {
+        let mut w = Writer::new(self.state_fingerprint());
+        self.coat.write_state(&mut w);
+        let readjusted = self.readjusted();
+        w.u64(readjusted.len() as u64);
+        readjusted.iter().for_each(|&f| w.u8(u8::from(f)));
+        w.finish()
+    }
+
+    /// Resumes from a blob of [`System::save_state`]: the feathers, reports
+    /// and frame count become those of the saved frame. A truncated,
+    /// corrupt or foreign blob (another mesh, roots or configuration) is
+    /// refused with `InvalidState` and nothing changes: the blob is parsed
+    /// and checked in full before it replaces the current frame.
+    pub fn load_state(&mut self, blob: &[u8]) -> Result<()> {
+        let mut reader = Reader::open(blob, self.state_fingerprint())?;
+        let dressing = &self.dressing;
+        let coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
+        let n = reader.len(1, Some(dressing.len()))?;
+        let mut readjusted = Vec::with_capacity(n);
+        for _ in 0..n {
+            match reader.u8()? {
+                0 => readjusted.push(false),
+                1 => readjusted.push(true),
+                _ => return Err(Error::new(ErrorKind::InvalidState, "a saved readjustment flag is not 0 or 1")),
+            }
+        }
+        reader.finish()?;
+        self.coat = coat;
+        self.work.adjuster.set_adjusted(&readjusted);
+        self.export();
+        Ok(())
+    }
+
+    /// What a blob must match to be loaded: a hash of every configuration
+    /// field that can change a result (all but the thread count, which
+    /// never does), the welded rest mesh (positions bit for bit, triangles,
+    /// caller vertex count) and every root's binding and shape.
+    fn state_fingerprint(&self) -> u64 {
+        // Destructured in full so that a new field cannot be forgotten here.
+        let Config {
+            seed,
+            threads: _,
+            sampler,
+            mode,
+            spacing,
+            target_feathers,
+            theta,
+            randomness,
+            pool_factor,
+            feather_length,
+            feather_width,
+            feather_thickness,
+            gamma,
+            lambda,
+            k_neighbours,
+            height_field_u,
+            height_field_v,
+            fluffiness,
+            collision_allowance,
+            theta_s,
+            flow_axis,
+            recompute_neighbourhoods,
+        } = &self.config;
+        let bits = |x: f32| u64::from(x.to_bits());
+        let mut words = vec![
+            *seed,
+            match sampler {
+                SamplerKind::Guided => 0,
+                SamplerKind::Random => 1,
+            },
+            match mode {
+                Mode::Incremental => 0,
+                Mode::Legacy => 1,
+                Mode::Rebuild => 2,
+            },
+            *target_feathers as u64,
+            *k_neighbours as u64,
+            *height_field_u as u64,
+            *height_field_v as u64,
+            u64::from(*recompute_neighbourhoods),
+        ];
+        words.extend(
+            [
+                *spacing,
+                *theta,
+                *randomness,
+                *pool_factor,
+                *feather_length,
+                *feather_width,
+                *feather_thickness,
+                *gamma,
+                *lambda,
+                *fluffiness,
+                *collision_allowance,
+                *theta_s,
+                flow_axis.x,
+                flow_axis.y,
+                flow_axis.z,
+            ]
+            .map(bits),
+        );
+        let mesh = &self.mesh;
+        words.push(mesh.caller_vertex_count() as u64);
+        words.push(mesh.positions.len() as u64);
+        words.extend(mesh.positions.iter().flat_map(|p| p.to_array().map(bits)));
+        words.push(mesh.triangles.len() as u64);
+        words.extend(mesh.triangles.iter().flat_map(|t| t.map(u64::from)));
+        let dressing = &self.dressing;
+        words.push(dressing.len() as u64);
+        for (root, shape) in dressing.roots.iter().zip(&dressing.shapes) {
+            words.extend([root.id, u64::from(root.point.face)]);
+            words.extend(root.point.bary.map(bits));
+            words.extend(root.rest_direction.map(bits));
+            words.extend([root.spacing, root.length_scale, root.width_scale].map(bits));
+            words.extend([shape.length, shape.width, shape.thickness, shape.vane_split].map(bits));
+        }
+        hash64(&words)
     }
 }

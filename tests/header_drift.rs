@@ -46,6 +46,10 @@ fn header_declares_the_contract() {
         "uint32_t plumage_system_evaluate(PlumageSystem *sys, const float *positions, size_t vertex_count)",
         "uint32_t plumage_system_feather_count(const PlumageSystem *sys, size_t *out)",
         "size_t plumage_system_last_error(const PlumageSystem *sys, char *buf, size_t capacity)",
+        "uint32_t plumage_system_save_state(const PlumageSystem *sys, uint8_t *buf, size_t capacity, size_t *out_len)",
+        "uint32_t plumage_system_load_state(PlumageSystem *sys, const uint8_t *blob, size_t len)",
+        "uint32_t plumage_system_validate(const PlumageSystem *sys, PlumageValidation *out)",
+        "uint32_t plumage_system_frame_stats(const PlumageSystem *sys, PlumageFrameStats *out)",
         "#define PLUMAGE_H",
         "Thread safety",
     ] {

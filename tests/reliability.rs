@@ -185,11 +185,17 @@ mod interruption {
         for allow in [0, 1, 2, 4, 8, 16, 32, 64] {
             let mut sys = System::new(&cfg, &mesh).unwrap();
             let before = feather_bytes(&sys);
+            let readjusted_before = sys.readjusted().to_vec();
             let rec = Recorder { seen: Mutex::new(Vec::new()), allow };
             match sys.step_with_progress(&wave(&shape, 0.5), &Progress::to(&rec)) {
                 Err(e) => {
                     assert_eq!(e.kind(), ErrorKind::Interrupted);
                     assert_eq!(feather_bytes(&sys), before, "stopped after {allow} reports: unchanged");
+                    assert_eq!(
+                        sys.readjusted(),
+                        &readjusted_before[..],
+                        "stopped after {allow}: same readjusted flags"
+                    );
                     assert_eq!(sys.frames_stepped(), 0);
                     stopped_somewhere += 1;
                     sys.step(&wave(&shape, 0.5)).unwrap();

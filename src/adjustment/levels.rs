@@ -128,6 +128,13 @@ impl Adjuster {
         &self.adjusted
     }
 
+    /// Replaces what [`adjusted`](Self::adjusted) reports, e.g. with the
+    /// flags saved with a frame that is being resumed.
+    pub fn set_adjusted(&mut self, flags: &[bool]) {
+        self.adjusted.clear();
+        self.adjusted.extend_from_slice(flags);
+    }
+
     /// Every feather's two triangles at the poses left by the last call.
     pub fn triangles(&self) -> &[[[Vec3; 3]; 2]] {
         &self.triangles

@@ -309,6 +309,50 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
     })
 }
 
+/// Saves the current frame (what the last successful create, step,
+/// evaluate or load left) as a byte blob, so that a later
+/// `plumage_system_load_state` resumes from it: the frames stepped after a
+/// load are byte-identical to those stepped after the save. Copy-out
+/// convention in bytes: `*out_len` receives the blob's size; a NULL or too
+/// small `buf` gives PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing
+/// else, so call once with NULL to learn the size. The blob is versioned
+/// and checksummed, and only a system created from the same mesh,
+/// per-vertex attributes and configuration accepts it (the thread count
+/// may differ).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_save_state(
+    sys: *const PlumageSystem,
+    buf: *mut u8,
+    capacity: usize,
+    out_len: *mut usize,
+) -> u32 {
+    with_system_ref(sys, |system| copy_out(&system.save_state(), buf, capacity, out_len))
+}
+
+/// Resumes from a blob of `len` bytes written by
+/// `plumage_system_save_state`: the feathers, reports and frame count
+/// become those of the saved frame, and later steps continue exactly as
+/// they did after the save. A NULL `blob` gives PLUMAGE_STATUS_NULL_POINTER;
+/// a truncated, corrupt or foreign blob (from a system with another mesh,
+/// roots or configuration, or of another format version) gives
+/// PLUMAGE_STATUS_INVALID_STATE. On any error the system is exactly as it
+/// was. The blob is only read during the call.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_load_state(sys: *mut PlumageSystem, blob: *const u8, len: usize) -> u32 {
+    with_system(sys, |system, _| {
+        if blob.is_null() {
+            return Err(Failure::null("blob"));
+        }
+        if len > isize::MAX as usize {
+            return Err(Failure::new(PLUMAGE_STATUS_SIZE_OVERFLOW, format!("blob length {len} is too large")));
+        }
+        // SAFETY: non-NULL, `len` readable bytes (contract), len <= isize::MAX.
+        let bytes = unsafe { std::slice::from_raw_parts(blob, len) };
+        system.load_state(bytes)?;
+        Ok(())
+    })
+}
+
 fn not_available(what: &str) -> Failure {
     Failure::new(PLUMAGE_STATUS_NOT_AVAILABLE, format!("{what} are not available: this system has no feathers yet"))
 }

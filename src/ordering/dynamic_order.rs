@@ -186,7 +186,7 @@ pub struct PriorityOrder {
     pub(super) suppressed: Vec<u32>,
     pub(super) touched: Vec<u32>,
     pub(super) blocking: Vec<(u32, u32)>,
-    path_pool: Vec<u32>,
+    pub(super) path_pool: Vec<u32>,
     path_pool_spare: Vec<u32>,
     // Search scratch.
     pub(super) mark: Vec<u32>,

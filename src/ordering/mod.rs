@@ -10,6 +10,10 @@
 //!   [`PriorityOrder::update_frame`] (dynamic topological order with the
 //!   paper's cycle rule).
 //!
+//! [`Neighbourhoods`] and [`PriorityOrder`] also save their state into a
+//! system's state blob and read it back, checked (`write_state` /
+//! `read_state`; the order's in `order_state`).
+//!
 //! A frame loop (incremental mode) does, per frame:
 //! 1. re-pose the roots; if neighbourhoods are recomputed,
 //!    [`Neighbourhoods::rebuild`];
@@ -29,6 +33,7 @@
 mod dynamic_order;
 mod kd_tree;
 mod neighbours;
+mod order_state;
 mod priority;
 mod static_order;
 

@@ -14,7 +14,9 @@
 //! candidates of each other.
 
 use super::kd_tree::KdTree;
+use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
+use crate::snapshot::{Reader, Writer};
 
 /// Parameters of the neighbourhood search.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -207,6 +209,129 @@ impl Neighbourhoods {
     }
 }
 
+/// Saved state (see [`crate::snapshot`]): the k-nearest rows, then the
+/// obstacle rows, each as CSR offsets then indices. The obstacle relation is
+/// symmetric and its rows sorted, so only the part above the diagonal
+/// (`j > i`) is stored and the rest is its transpose. The pair set is
+/// derived from the k-nearest rows on load, and the k-d tree and the fill
+/// buffers are scratch of [`rebuild`](Self::rebuild), so none of them is
+/// stored.
+impl Neighbourhoods {
+    /// Appends the neighbourhoods to a state blob.
+    pub fn write_state(&self, w: &mut Writer) {
+        write_csr(w, &self.knn_offsets, &self.knn_indices);
+        let n = self.len() as u32;
+        debug_assert!((0..n).all(|i| self.obstacle_candidates_of(i).windows(2).all(|p| p[0] < p[1])));
+        debug_assert!((0..n).all(|i| {
+            self.obstacle_candidates_of(i).iter().all(|&j| self.obstacle_candidates_of(j).binary_search(&i).is_ok())
+        }));
+        let mut offsets = vec![0u32];
+        let mut upper = Vec::new();
+        for i in 0..n {
+            let candidates = self.obstacle_candidates_of(i);
+            upper.extend_from_slice(&candidates[candidates.partition_point(|&j| j <= i)..]);
+            offsets.push(upper.len() as u32);
+        }
+        write_csr(w, &offsets, &upper);
+    }
+
+    /// Reads neighbourhoods of `roots` roots written by
+    /// [`write_state`](Self::write_state). Everything is checked before it
+    /// is used: offsets start at 0, never decrease and end at the index
+    /// count; every index is a root other than the row's own; stored
+    /// obstacle rows are strictly increasing and above the diagonal (so the
+    /// rebuilt relation is symmetric with sorted rows). Anything else is
+    /// refused with `InvalidState`.
+    pub fn read_state(r: &mut Reader<'_>, roots: usize) -> Result<Self> {
+        if u32::try_from(roots).is_err() {
+            return Err(invalid("too many roots for a saved neighbourhood"));
+        }
+        let mut s = Self::default();
+        read_csr(r, roots, &mut s.knn_offsets, &mut s.knn_indices, "neighbourhood")?;
+        let (mut offsets, mut upper) = (Vec::new(), Vec::new());
+        read_csr(r, roots, &mut offsets, &mut upper, "obstacle")?;
+        if upper.len() > u32::MAX as usize / 2 {
+            return Err(invalid("saved obstacle rows are too long"));
+        }
+        for i in 0..roots as u32 {
+            let stored = row(&offsets, &upper, i);
+            if stored.first().is_some_and(|&j| j < i) || stored.windows(2).any(|p| p[0] >= p[1]) {
+                return Err(invalid(format!("saved obstacle row {i} is not increasing above the diagonal")));
+            }
+        }
+        s.symmetric_obstacles_from_upper(roots, &offsets, &upper);
+        s.rebuild_pairs(roots);
+        Ok(s)
+    }
+
+    /// Fills the obstacle rows from their part above the diagonal: row `i`
+    /// is `{j < i : i ∈ upper_j}` (in increasing `j`) followed by `upper_i`.
+    fn symmetric_obstacles_from_upper(&mut self, n: usize, offsets: &[u32], upper: &[u32]) {
+        self.obstacle_offsets.clear();
+        self.obstacle_offsets.resize(n + 1, 0);
+        for i in 0..n as u32 {
+            let stored = row(offsets, upper, i);
+            self.obstacle_offsets[i as usize + 1] += stored.len() as u32;
+            for &j in stored {
+                self.obstacle_offsets[j as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            self.obstacle_offsets[i + 1] += self.obstacle_offsets[i];
+        }
+        self.fill_cursor.clear();
+        self.fill_cursor.extend_from_slice(&self.obstacle_offsets[..n]);
+        self.obstacle_indices.clear();
+        self.obstacle_indices.resize(2 * upper.len(), 0);
+        for i in 0..n as u32 {
+            for &j in row(offsets, upper, i) {
+                let slot = &mut self.fill_cursor[j as usize];
+                self.obstacle_indices[*slot as usize] = i;
+                *slot += 1;
+            }
+        }
+        for i in 0..n as u32 {
+            for &j in row(offsets, upper, i) {
+                let slot = &mut self.fill_cursor[i as usize];
+                self.obstacle_indices[*slot as usize] = j;
+                *slot += 1;
+            }
+        }
+    }
+}
+
+/// Writes one CSR structure: offsets (at least the leading 0), then indices.
+fn write_csr(w: &mut Writer, offsets: &[u32], indices: &[u32]) {
+    w.u32s(if offsets.is_empty() { &[0] } else { offsets });
+    w.u32s(indices);
+}
+
+/// Reads one CSR structure of `roots` rows and checks its shape and that
+/// every index names another root.
+fn read_csr(
+    r: &mut Reader<'_>,
+    roots: usize,
+    offsets: &mut Vec<u32>,
+    indices: &mut Vec<u32>,
+    what: &str,
+) -> Result<()> {
+    r.u32s_into(offsets, Some(roots + 1))?;
+    r.u32s_into(indices, None)?;
+    if offsets[0] != 0 || offsets.windows(2).any(|w| w[0] > w[1]) || offsets[roots] as usize != indices.len() {
+        return Err(invalid(format!("saved {what} offsets are not a valid row layout")));
+    }
+    for i in 0..roots as u32 {
+        if row(offsets, indices, i).iter().any(|&j| j == i || j as usize >= roots) {
+            return Err(invalid(format!("saved {what} row {i} names an invalid root")));
+        }
+    }
+    Ok(())
+}
+
+fn invalid(message: impl Into<String>) -> Error {
+    Error::new(ErrorKind::InvalidState, message)
+}
+
 /// Row `i` of a CSR structure (empty when `i` is out of range).
 fn row<'a>(offsets: &[u32], indices: &'a [u32], i: u32) -> &'a [u32] {
     let i = i as usize;
@@ -227,4 +352,86 @@ fn normals_agree(a: &RootFrame, b: &RootFrame, min_dot: f32) -> bool {
 #[inline]
 fn sanitized_reach(r: f32) -> f32 {
     if r.is_finite() && r > 0.0 { r } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// Roots on a wavy 12 × 12 patch, reach long enough for many obstacles.
+    fn patch() -> (Vec<RootFrame>, Vec<f32>) {
+        let frames: Vec<RootFrame> = (0..144)
+            .map(|k| {
+                let (x, y) = ((k % 12) as f32, (k / 12) as f32);
+                let p = Vec3::new(x + 0.3 * (y * 1.7).sin(), y, 0.2 * (x * 0.9).sin());
+                RootFrame::from_normal_and_direction(p, Vec3::Z, Vec3::X).unwrap()
+            })
+            .collect();
+        let reach = (0..144).map(|k| 1.0 + (k % 5) as f32 * 0.4).collect();
+        (frames, reach)
+    }
+
+    fn blob_of(write: impl FnOnce(&mut Writer)) -> Vec<u8> {
+        let mut w = Writer::new(1);
+        write(&mut w);
+        w.finish()
+    }
+
+    fn read(blob: &[u8], roots: usize) -> Result<Neighbourhoods> {
+        let mut r = Reader::open(blob, 1)?;
+        let s = Neighbourhoods::read_state(&mut r, roots)?;
+        r.finish()?;
+        Ok(s)
+    }
+
+    #[test]
+    fn round_trip_restores_every_relation() {
+        let (frames, reach) = patch();
+        let mut nb = Neighbourhoods::new();
+        nb.rebuild(&frames, &reach, &NeighbourParams::default());
+        assert!(nb.obstacle_csr().1.len() > 10 * frames.len(), "the patch must have many obstacles");
+        let blob = blob_of(|w| nb.write_state(w));
+        let back = read(&blob, frames.len()).unwrap();
+        assert_eq!(back.neighbours_csr(), nb.neighbours_csr());
+        assert_eq!(back.obstacle_csr(), nb.obstacle_csr());
+        assert_eq!(back.pairs(), nb.pairs());
+        assert_eq!(blob_of(|w| back.write_state(w)), blob);
+        assert_eq!(read(&blob, frames.len() + 1).unwrap_err().kind(), ErrorKind::InvalidState);
+        let empty = blob_of(|w| Neighbourhoods::new().write_state(w));
+        assert!(read(&empty, 0).unwrap().is_empty());
+    }
+
+    #[test]
+    fn hostile_rows_are_refused() {
+        // Three roots; k-nearest rows, then the obstacle rows above the diagonal.
+        let blob = |knn: (&[u32], &[u32]), obstacles: (&[u32], &[u32])| {
+            blob_of(|w| {
+                w.u32s(knn.0);
+                w.u32s(knn.1);
+                w.u32s(obstacles.0);
+                w.u32s(obstacles.1);
+            })
+        };
+        let good_knn: (&[u32], &[u32]) = (&[0, 1, 2, 3], &[1, 0, 1]);
+        let good_obstacles: (&[u32], &[u32]) = (&[0, 2, 2, 2], &[1, 2]);
+        let ok = read(&blob(good_knn, good_obstacles), 3).unwrap();
+        assert_eq!(ok.obstacle_candidates_of(2), &[0]);
+        assert_eq!(ok.pairs(), &[(0, 1), (1, 2)]);
+        for (what, knn, obstacles) in [
+            ("index out of range", (&[0u32, 1, 2, 3][..], &[1u32, 0, 7][..]), good_obstacles),
+            ("own root", (&[0, 1, 2, 3], &[0, 0, 1]), good_obstacles),
+            ("offsets decrease", (&[0, 2, 1, 3], &[1, 2, 1]), good_obstacles),
+            ("offsets overrun", (&[0, 1, 2, 9], &[1, 0, 1]), good_obstacles),
+            ("offsets not from 0", (&[1, 1, 2, 3], &[1, 0, 1]), good_obstacles),
+            ("too few offsets", (&[0, 1, 3], &[1, 0, 1]), good_obstacles),
+            ("obstacle below the diagonal", good_knn, (&[0, 0, 1, 1], &[0])),
+            ("obstacle row unsorted", good_knn, (&[0, 2, 2, 2], &[2, 1])),
+            ("obstacle row repeated", good_knn, (&[0, 2, 2, 2], &[1, 1])),
+            ("obstacle out of range", good_knn, (&[0, 1, 1, 1], &[3])),
+        ] {
+            let err = read(&blob(knn, obstacles), 3).expect_err(what);
+            assert_eq!(err.kind(), ErrorKind::InvalidState, "{what}");
+        }
+    }
 }
