@@ -3,6 +3,7 @@
 // hierarchies, strides, primitives, file formats and refusals.
 //   evaluation_test CASE WORK_DIR
 #include "errors.h"
+#include "check.h"
 #include "gltf_fixture.h"
 #include "gltf_loader.h"
 #include "gltf_scene.h"
@@ -23,16 +24,9 @@ using json = nlohmann::json;
 
 namespace {
 
-int g_failures = 0;
-std::string g_dir;
+using plumage_check::check;
 
-void check(bool ok, const std::string& what, int line) {
-    if (!ok) {
-        ++g_failures;
-        std::fprintf(stderr, "FAILED (line %d): %s\n", line, what.c_str());
-    }
-}
-#define CHECK(cond) check((cond), #cond, __LINE__)
+std::string g_dir;
 
 std::string path(const std::string& name) { return (std::filesystem::path(g_dir) / name).string(); }
 
@@ -512,6 +506,5 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
         check(false, std::string("unexpected exception: ") + e.what(), __LINE__);
     }
-    if (g_failures == 0) std::printf("%s: ok\n", argv[1]);
-    return g_failures == 0 ? 0 : 1;
+    return plumage_check::finish(argv[1]);
 }

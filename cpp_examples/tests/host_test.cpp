@@ -3,6 +3,7 @@
 //   host_test HOST_EXE WORK_DIR DATA_DIR SCENARIO
 // Scenarios that need ../shared/data exit 77 (ctest SKIP) when it is absent.
 #include "gltf_fixture.h"
+#include "check.h"
 
 #include <tiny_gltf.h>
 
@@ -29,16 +30,9 @@ namespace {
 
 constexpr int kSkip = 77;
 
-int g_failures = 0;
 std::string g_host, g_dir, g_data;
 
-void check(bool ok, const std::string& what, int line) {
-    if (!ok) {
-        ++g_failures;
-        std::fprintf(stderr, "FAILED (line %d): %s\n", line, what.c_str());
-    }
-}
-#define CHECK(cond) check((cond), #cond, __LINE__)
+using plumage_check::check;
 #define CHECK_MSG(cond, msg) check((cond), std::string(#cond) + ": " + (msg), __LINE__)
 
 std::string path(const std::string& name) { return (std::filesystem::path(g_dir) / name).string(); }
@@ -349,6 +343,5 @@ int main(int argc, char** argv) {
         check(false, std::string("unexpected exception: ") + e.what(), __LINE__);
     }
     if (code == kSkip) return kSkip;
-    if (g_failures == 0) std::printf("%s: ok\n", argv[4]);
-    return g_failures == 0 ? 0 : 1;
+    return plumage_check::finish(argv[4]);
 }

@@ -3,6 +3,7 @@
 // library has not computed them.
 //   output_test CASE WORK_DIR
 #include "gltf_writer.h"
+#include "check.h"
 #include "plumage_system.h"
 #include "report.h"
 
@@ -22,16 +23,9 @@ using json = nlohmann::ordered_json;
 
 namespace {
 
-int g_failures = 0;
-std::string g_dir;
+using plumage_check::check;
 
-void check(bool ok, const std::string& what, int line) {
-    if (!ok) {
-        ++g_failures;
-        std::fprintf(stderr, "FAILED (line %d): %s\n", line, what.c_str());
-    }
-}
-#define CHECK(cond) check((cond), #cond, __LINE__)
+std::string g_dir;
 
 std::string path(const std::string& name) { return (std::filesystem::path(g_dir) / name).string(); }
 
@@ -266,6 +260,5 @@ int main(int argc, char** argv) {
     } catch (const std::exception& e) {
         check(false, std::string("unexpected exception: ") + e.what(), __LINE__);
     }
-    if (g_failures == 0) std::printf("%s: ok\n", argv[1]);
-    return g_failures == 0 ? 0 : 1;
+    return plumage_check::finish(argv[1]);
 }

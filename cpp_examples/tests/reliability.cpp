@@ -5,6 +5,8 @@
 // resuming a frame.
 #include "plumage.h"
 
+#include "check.h"
+
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -15,19 +17,6 @@
 #include <vector>
 
 namespace {
-
-int g_passed = 0;
-int g_failed = 0;
-
-void check(bool ok, const char* what, int line) {
-    if (ok) {
-        ++g_passed;
-    } else {
-        ++g_failed;
-        std::fprintf(stderr, "FAILED line %d: %s\n", line, what);
-    }
-}
-#define CHECK(cond) check((cond), #cond, __LINE__)
 
 struct SystemDeleter {
     void operator()(PlumageSystem* s) const { plumage_system_destroy(s); }
@@ -467,6 +456,5 @@ int main() {
     test_forced_panic();
     test_two_threads();
     test_save_and_resume();
-    std::printf("reliability: %d passed, %d failed\n", g_passed, g_failed);
-    return g_failed == 0 ? 0 : 1;
+    return plumage_check::finish("reliability");
 }

@@ -3,6 +3,8 @@
 // status and a message, leave *out NULL, and leave a live system usable.
 #include "plumage.h"
 
+#include "check.h"
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -11,19 +13,6 @@
 #include <vector>
 
 namespace {
-
-int g_passed = 0;
-int g_failed = 0;
-
-void check(bool ok, const char* what, int line) {
-    if (ok) {
-        ++g_passed;
-    } else {
-        ++g_failed;
-        std::fprintf(stderr, "FAILED line %d: %s\n", line, what);
-    }
-}
-#define CHECK(cond) check((cond), #cond, __LINE__)
 
 std::string last_error(const PlumageSystem* sys) {
     size_t need = plumage_system_last_error(sys, nullptr, 0);
@@ -74,9 +63,9 @@ void expect_refused(const PlumageConfig* cfg, const PlumageMeshDesc* mesh, uint3
         std::fprintf(stderr, "  %s: got %s, wanted %s (%s)\n", what, plumage_status_name(got),
                      plumage_status_name(want), msg.c_str());
     }
-    check(got == want, what, __LINE__);
-    check(out == nullptr, "*out is NULL after a refusal", __LINE__);
-    check(!msg.empty(), "a refusal leaves a message", __LINE__);
+    plumage_check::check(got == want, what, __LINE__);
+    plumage_check::check(out == nullptr, "*out is NULL after a refusal", __LINE__);
+    plumage_check::check(!msg.empty(), "a refusal leaves a message", __LINE__);
     if (out != nullptr && out != reinterpret_cast<PlumageSystem*>(0x1)) plumage_system_destroy(out);
 }
 
@@ -239,6 +228,5 @@ int main() {
     test_bad_meshes();
     test_live_system();
     test_last_error_buffer();
-    std::printf("smoke: %d passed, %d failed\n", g_passed, g_failed);
-    return g_failed == 0 ? 0 : 1;
+    return plumage_check::finish("smoke");
 }
