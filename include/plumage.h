@@ -533,6 +533,16 @@ typedef struct PlumageFrameStats {
    * Seconds of the whole call.
    */
   double step_seconds;
+  /**
+   * Roots whose face deformed differently from a neighbour's since the
+   * previous frame (the paper's R_k); 0 after create and evaluate.
+   */
+  uint64_t deformed;
+  /**
+   * Roots readjusted in any case (R*_k: R_k plus the roots the
+   * reordering touched); `adjusted` minus this came by propagation.
+   */
+  uint64_t seeds;
 } PlumageFrameStats;
 
 /**

@@ -244,3 +244,51 @@ fn last_error_truncates_and_reports_the_needed_size() {
     unsafe { plumage_system_last_error(null(), one.as_mut_ptr(), 1) };
     assert_eq!(one[0], 0);
 }
+
+#[test]
+fn frame_stats_report_r_k_and_the_seeds() {
+    // A 20 × 20 plate (indexed); feathers point +x.
+    let n = 21;
+    let mut pos = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            pos.extend_from_slice(&[i as f32 * 0.5, j as f32 * 0.5, 0.0]);
+        }
+    }
+    let mut idx = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = (j * n + i) as u32;
+            idx.extend_from_slice(&[a, a + 1, a + n as u32 + 1, a, a + n as u32 + 1, a + n as u32]);
+        }
+    }
+    let d = desc(&pos, &idx);
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+    let cfg = PlumageConfig { target_feathers: 400, threads: 1, ..unsafe { cfg.assume_init() } };
+    let mut sys = null_mut();
+    assert_eq!(unsafe { plumage_system_create(&cfg, &d, &mut sys) }, PLUMAGE_STATUS_OK, "{}", thread_error());
+    let stats = |sys: *const PlumageSystem| {
+        let mut s =
+            PlumageFrameStats { struct_size: std::mem::size_of::<PlumageFrameStats>() as u32, ..Default::default() };
+        assert_eq!(unsafe { plumage_system_frame_stats(sys, &mut s) }, PLUMAGE_STATUS_OK);
+        s
+    };
+    let mut feathers = 0usize;
+    unsafe { plumage_system_feather_count(sys, &mut feathers) };
+    let created = stats(sys);
+    assert_eq!((created.deformed, created.seeds, created.adjusted), (0, feathers as u64, feathers as u64));
+    // Fold the strip x < 2 up about the line x = 2.
+    let bent: Vec<f32> = pos
+        .chunks(3)
+        .flat_map(
+            |p| if p[0] < 2.0 { [2.0 - (2.0 - p[0]) * 0.9, p[1], (2.0 - p[0]) * 0.44] } else { [p[0], p[1], p[2]] },
+        )
+        .collect();
+    assert_eq!(unsafe { plumage_system_step(sys, bent.as_ptr(), pos.len() / 3) }, PLUMAGE_STATUS_OK);
+    let s = stats(sys);
+    assert!(s.deformed > 0, "the fold deforms roots near it");
+    assert!(s.deformed <= s.seeds && s.seeds <= s.adjusted, "{} ≤ {} ≤ {}", s.deformed, s.seeds, s.adjusted);
+    assert!((s.adjusted as usize) < feathers, "a local fold does not readjust everything");
+    unsafe { plumage_system_destroy(sys) };
+}

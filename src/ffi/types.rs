@@ -469,6 +469,12 @@ pub struct PlumageFrameStats {
     pub adjust_seconds: f64,
     /// Seconds of the whole call.
     pub step_seconds: f64,
+    /// Roots whose face deformed differently from a neighbour's since the
+    /// previous frame (the paper's R_k); 0 after create and evaluate.
+    pub deformed: u64,
+    /// Roots readjusted in any case (R*_k: R_k plus the roots the
+    /// reordering touched); `adjusted` minus this came by propagation.
+    pub seeds: u64,
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
@@ -497,6 +503,6 @@ const _: () = {
     assert!(size_of::<PlumageFeather>() == 8 + 4 + 4 + 4 * 3 * 4 + 4 * 5 + 4);
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 12);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 14);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 4);
 };
