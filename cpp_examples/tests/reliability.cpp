@@ -6,6 +6,7 @@
 #include "plumage.h"
 
 #include "check.h"
+#include "last_error.h"
 
 #include <atomic>
 #include <cmath>
@@ -22,14 +23,6 @@ struct SystemDeleter {
     void operator()(PlumageSystem* s) const { plumage_system_destroy(s); }
 };
 using SystemPtr = std::unique_ptr<PlumageSystem, SystemDeleter>;
-
-std::string last_error(const PlumageSystem* sys) {
-    size_t need = plumage_system_last_error(sys, nullptr, 0);
-    std::string s(need, '\0');
-    plumage_system_last_error(sys, s.data(), s.size());
-    s.resize(need ? need - 1 : 0);
-    return s;
-}
 
 struct Mesh {
     std::vector<float> positions;

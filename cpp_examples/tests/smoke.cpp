@@ -4,6 +4,7 @@
 #include "plumage.h"
 
 #include "check.h"
+#include "last_error.h"
 
 #include <cmath>
 #include <cstdio>
@@ -13,14 +14,6 @@
 #include <vector>
 
 namespace {
-
-std::string last_error(const PlumageSystem* sys) {
-    size_t need = plumage_system_last_error(sys, nullptr, 0);
-    std::string s(need, '\0');
-    plumage_system_last_error(sys, s.data(), s.size());
-    s.resize(need ? need - 1 : 0);
-    return s;
-}
 
 struct Soup {
     std::vector<float> positions;
