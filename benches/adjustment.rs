@@ -155,6 +155,7 @@ fn one_feather(c: &mut Criterion) {
         .map(|&j| ObstacleFeather {
             triangles: feather_triangles(&scene.frames[j], &scene.shapes[j], poses[j]),
             thickness: scene.shapes[j].thickness,
+            far_side: false,
         })
         .collect();
     let params = AdjustParams::default();

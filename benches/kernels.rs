@@ -26,7 +26,7 @@ use plumage::geometry::{RootFrame, SurfacePoint};
 use plumage::mesh::{MeshInput, weld};
 use plumage::ordering::{NeighbourParams, Neighbourhoods, Priorities, PriorityOrder};
 use plumage::rng::Rng;
-use plumage::roots::{RootBinding, edge_basis_coordinates, pose_roots, root_id};
+use plumage::roots::{RootBinding, RootNormal, edge_basis_coordinates, pose_roots, root_id};
 use plumage::surface::{Surface, vertex_normals_into};
 use std::hint::black_box;
 use std::time::Duration;
@@ -191,10 +191,14 @@ fn pose(c: &mut Criterion) {
     let mut out = Vec::with_capacity(ROOTS);
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     c.bench_function("pose_roots/10k_one_thread", |b| {
-        b.iter(|| one.install(|| pose_roots(black_box(&roots), &posed, &triangles, &normals, &mut out)))
+        b.iter(|| {
+            one.install(|| {
+                pose_roots(black_box(&roots), &posed, &triangles, &normals, RootNormal::FaceLimited, &mut out)
+            })
+        })
     });
     c.bench_function("pose_roots/10k_default_pool", |b| {
-        b.iter(|| pose_roots(black_box(&roots), &posed, &triangles, &normals, &mut out))
+        b.iter(|| pose_roots(black_box(&roots), &posed, &triangles, &normals, RootNormal::FaceLimited, &mut out))
     });
 }
 

@@ -39,6 +39,12 @@ impl Aabb {
         Self { min: p - Vec3::splat(r), max: p + Vec3::splat(r) }
     }
 
+    /// Whether the box is a single point (a collapsed triangle's).
+    #[inline]
+    pub fn is_point(&self) -> bool {
+        self.min == self.max
+    }
+
     /// Whether two closed boxes share a point.
     #[inline]
     pub fn overlaps(&self, other: &Aabb) -> bool {

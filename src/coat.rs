@@ -12,7 +12,7 @@ use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_directi
 use crate::geometry::RootFrame;
 use crate::ordering::{NeighbourParams, Neighbourhoods, Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
-use crate::roots::{RootBinding, pose_roots};
+use crate::roots::{RootBinding, RootNormal, pose_roots};
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
 use crate::surface::Surface;
@@ -132,7 +132,14 @@ impl Coat {
         self.positions.clear();
         self.positions.extend_from_slice(positions);
         dressing.surface.vertex_normals(&self.positions, &mut self.normals);
-        pose_roots(&dressing.roots, &self.positions, &dressing.triangles, &self.normals, &mut self.frames);
+        pose_roots(
+            &dressing.roots,
+            &self.positions,
+            &dressing.triangles,
+            &self.normals,
+            RootNormal::FaceLimited,
+            &mut self.frames,
+        );
     }
 
     /// Solves the coat from scratch at `positions`: neighbourhoods, the
@@ -236,8 +243,8 @@ impl Coat {
                 direction: shaft_direction(frame, *pose).to_array(),
                 pitch: pose.pitch,
                 roll: pose.roll,
-                length: shape.length,
-                width: shape.width,
+                length: shape.length * pose.scale,
+                width: shape.width * pose.scale,
                 thickness: shape.thickness,
             });
         }
@@ -249,7 +256,7 @@ impl Coat {
 /// the positions, so they are recomputed on load rather than stored.
 ///
 /// Layout: frame index (u64); welded positions (u64 count, then xyz f32
-/// each); poses (u64 count, then pitch and roll f32 each); the ordering
+/// each); poses (u64 count, then pitch, roll and scale f32 each); the ordering
 /// report (four u64 counts, seconds f64); the frame report (frame index and
 /// nine counts as u64, three timings f64); the neighbourhoods
 /// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]).
@@ -261,10 +268,11 @@ impl Coat {
         for p in &self.positions {
             p.to_array().iter().for_each(|&x| w.f32(x));
         }
-        w.u64(2 * self.poses.len() as u64);
+        w.u64(3 * self.poses.len() as u64);
         for pose in &self.poses {
             w.f32(pose.pitch);
             w.f32(pose.roll);
+            w.f32(pose.scale);
         }
         // Destructured in full (as in `read_state`) so that a new report
         // field cannot be forgotten here.
@@ -314,14 +322,18 @@ impl Coat {
             }
             positions.push(p);
         }
-        r.len(4, Some(2 * n))?;
+        r.len(4, Some(3 * n))?;
         let limits = &dressing.adjust_params;
         let mut poses = Vec::with_capacity(n);
         for _ in 0..n {
-            let pose = FeatherPose::new(r.f32()?, r.f32()?);
-            if !(pose.pitch >= limits.min_pitch && pose.pitch <= limits.max_pitch && pose.roll.abs() <= limits.max_roll)
+            let pose = FeatherPose::new(r.f32()?, r.f32()?).with_scale(r.f32()?);
+            if !(pose.pitch >= limits.min_pitch
+                && pose.pitch <= limits.max_pitch
+                && pose.roll.abs() <= limits.max_roll
+                && (pose.scale >= limits.min_scale || pose.scale == 0.0)
+                && pose.scale <= 1.0)
             {
-                return Err(invalid_state("a saved feather pose lies outside the pitch and roll limits"));
+                return Err(invalid_state("a saved feather pose lies outside the pitch, roll and size limits"));
             }
             poses.push(pose);
         }

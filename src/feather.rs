@@ -92,6 +92,14 @@ impl FeatherShape {
         }
     }
 
+    /// This shape shrunk by `scale` about the root: length and width scale,
+    /// the thickness (and so the clearance over it) stays. The shrunk kite
+    /// lies inside the full one, since the kite is convex and holds its root.
+    #[inline]
+    pub fn scaled(&self, scale: f32) -> Self {
+        Self { length: self.length * scale, width: self.width * scale, ..*self }
+    }
+
     /// The flat kite in local coordinates: root, tip, +y corner, −y corner.
     pub fn kite_corners(&self) -> [Vec3; 4] {
         let cx = self.vane_split * self.length;
@@ -100,19 +108,35 @@ impl FeatherShape {
     }
 }
 
-/// The two adjustable angles of a feather (radians).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// The adjustable state of a feather: two angles (radians) and a size.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FeatherPose {
     /// α: rotation about the binormal; positive lifts the tip off the skin.
     pub pitch: f32,
     /// β: rotation about the shaft; positive lifts the +y (binormal-side) vane.
     pub roll: f32,
+    /// Size as a fraction of the feather's shape, in (0, 1]: a feather that
+    /// cannot lie down within the pitch limit (a concave corner, a thin
+    /// limb, a flow sink) is shortened instead of standing up
+    /// (see [`FeatherShape::scaled`]).
+    pub scale: f32,
+}
+
+impl Default for FeatherPose {
+    fn default() -> Self {
+        Self::new(0.0, 0.0)
+    }
 }
 
 impl FeatherPose {
-    /// A pose from pitch and roll.
+    /// A full-size pose from pitch and roll.
     pub fn new(pitch: f32, roll: f32) -> Self {
-        Self { pitch, roll }
+        Self { pitch, roll, scale: 1.0 }
+    }
+
+    /// The same angles at size `scale`.
+    pub fn with_scale(self, scale: f32) -> Self {
+        Self { scale, ..self }
     }
 
     /// Rotates a point of the flat feather (local coordinates, z = 0 or
@@ -155,14 +179,14 @@ pub fn feather_normal(frame: &RootFrame, pose: FeatherPose) -> Vec3 {
 /// `[root, −y corner, tip]`. Both wind so that their normal faces away from
 /// the skin when the feather lies flat.
 pub fn feather_triangles(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> [[Vec3; 3]; 2] {
-    let [root, tip, left, right] = shape.kite_corners().map(|p| frame.to_world(pose.apply_local(p)));
+    let [root, tip, left, right] = shape.scaled(pose.scale).kite_corners().map(|p| frame.to_world(pose.apply_local(p)));
     [[root, tip, left], [root, right, tip]]
 }
 
 /// The posed tip position in world space.
 #[inline]
 pub fn tip_position(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Vec3 {
-    frame.position + shaft_direction(frame, pose) * shape.length
+    frame.position + shaft_direction(frame, pose) * (shape.length * pose.scale)
 }
 
 #[cfg(test)]

@@ -390,8 +390,11 @@ fn a_later_feather_lies_on_an_earlier_one_with_just_enough_pitch() {
     let mut field = HeightField::new(32, 16);
     let first =
         adjust_feather(&ahead, &shape, FeatherPose::default(), &[], &body, &params, AdjustSteps::Full, &mut field);
-    let obstacle =
-        ObstacleFeather { triangles: feather_triangles(&ahead, &shape, first.pose), thickness: shape.thickness };
+    let obstacle = ObstacleFeather {
+        triangles: feather_triangles(&ahead, &shape, first.pose),
+        thickness: shape.thickness,
+        far_side: false,
+    };
     let second = adjust_feather(
         &behind,
         &shape,
@@ -556,6 +559,7 @@ fn levels_give_the_serial_result() {
             .map(|j| ObstacleFeather {
                 triangles: feather_triangles(&scene.frames[j], &scene.shapes[j], serial[j]),
                 thickness: scene.shapes[j].thickness,
+                far_side: false,
             })
             .collect();
         serial[i] = adjust_feather(
@@ -671,6 +675,7 @@ fn warm_scratch_allocates_nothing() {
             .map(|j| ObstacleFeather {
                 triangles: feather_triangles(&scene.frames[j], &scene.shapes[j], poses[j]),
                 thickness: scene.shapes[j].thickness,
+                far_side: false,
             })
             .collect()
     };

@@ -54,6 +54,10 @@ const FLOOR_DEPTH_PER_LENGTH: f32 = 0.5;
 /// Validation tolerates body crossings within 5 % of the length.
 pub(crate) const SOCKET_FRACTION: f32 = 0.025;
 
+/// Heights nearer the root than this fraction of the length are judged at
+/// this distance (see [`HeightField::reset`]).
+pub(crate) const JUDGE_FRACTION: f32 = 0.08;
+
 /// Which layer a triangle goes into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Layer {
@@ -97,6 +101,9 @@ pub struct HeightField {
     pub(crate) row_span: Vec<[f32; 2]>,
     /// Body triangle ids of the last query.
     pub(crate) body_ids: Vec<u32>,
+    /// Scratch of the exact check of a chosen pose: the feather's part
+    /// beyond its root socket.
+    pub(crate) check_part: Vec<[Vec3; 3]>,
 }
 
 impl HeightField {
@@ -124,6 +131,7 @@ impl HeightField {
             first_col: 0,
             row_span: Vec::new(),
             body_ids: Vec::new(),
+            check_part: Vec::new(),
         };
         f.set_resolution(u, v);
         f
@@ -174,7 +182,7 @@ impl HeightField {
         for i in 0..self.u {
             let x = (i as f32 + 0.5) * self.dx;
             self.col_x[i] = x;
-            self.col_near[i] = (x - 0.5 * self.dx).max(self.socket_x);
+            self.col_near[i] = (x - 0.5 * self.dx).max(JUDGE_FRACTION * l);
             self.col_far[i] = x + 0.5 * self.dx;
             self.inv_near[i] = 1.0 / self.col_near[i];
             self.inv_far[i] = 1.0 / self.col_far[i];

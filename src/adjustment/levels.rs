@@ -19,6 +19,10 @@ use std::time::Instant;
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
+/// Obstacles whose root normal is more than 120° from the adjusted
+/// feather's grow from the far side of a thin part (see
+/// [`ObstacleFeather::far_side`]).
+const FAR_SIDE_NORMAL_DOT: f32 = -0.5;
 
 /// Candidate lists in compressed rows: the candidates of root `i` are
 /// `indices[offsets[i]..offsets[i + 1]]` (roots within reach, any order).
@@ -395,9 +399,11 @@ fn adjust_one(
         return None;
     }
     worker.obstacles.clear();
-    worker
-        .obstacles
-        .extend(earlier.map(|j| ObstacleFeather { triangles: triangles[j], thickness: inputs.shapes[j].thickness }));
+    worker.obstacles.extend(earlier.map(|j| ObstacleFeather {
+        triangles: triangles[j],
+        thickness: inputs.shapes[j].thickness,
+        far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+    }));
     Some(adjust_feather(
         &inputs.frames[i],
         &inputs.shapes[i],

@@ -45,6 +45,9 @@ pub(crate) const DEFAULT_MIN_PITCH: f32 = -0.35;
 pub(crate) const DEFAULT_MAX_PITCH: f32 = 1.1;
 /// Default largest roll magnitude (radians, about 34°).
 pub(crate) const DEFAULT_MAX_ROLL: f32 = 0.6;
+/// Default smallest size a feather is shortened to (fraction of its shape)
+/// when it cannot lie down within the pitch limit.
+pub(crate) const DEFAULT_MIN_SCALE: f32 = 0.15;
 
 /// Parameters of the height-field adjustment.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +72,9 @@ pub struct AdjustParams {
     pub max_pitch: f32,
     /// Largest roll magnitude, radians (< π/2).
     pub max_roll: f32,
+    /// Smallest size, as a fraction of the feather's shape, that a feather
+    /// needing more than `max_pitch` is shortened to (1 = never shorten).
+    pub min_scale: f32,
 }
 
 impl Default for AdjustParams {
@@ -83,6 +89,7 @@ impl Default for AdjustParams {
             min_pitch: DEFAULT_MIN_PITCH,
             max_pitch: DEFAULT_MAX_PITCH,
             max_roll: DEFAULT_MAX_ROLL,
+            min_scale: DEFAULT_MIN_SCALE,
         }
     }
 }
@@ -118,6 +125,10 @@ pub struct ObstacleFeather {
     pub triangles: [[Vec3; 3]; 2],
     /// Its thickness: its top lies this far above its triangles.
     pub thickness: f32,
+    /// Whether it grows from the far side of a thin part (its normal turned
+    /// away from the adjusted feather's): a height field cannot represent
+    /// it, so it is only checked exactly, never rasterised.
+    pub far_side: bool,
 }
 
 /// The result of adjusting one feather.

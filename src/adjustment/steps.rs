@@ -30,8 +30,9 @@
 use super::height_field::{ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape};
+use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
+use crate::validation::{feathers_intersect, penetrates_body};
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
 /// two to five.
@@ -39,6 +40,12 @@ const MAX_JUMPS: usize = 64;
 /// Free height under a vane is capped at this fraction of the width when
 /// balancing volumes (empty space far below does not pull the roll).
 const FREE_HEIGHT_CAP_PER_WIDTH: f32 = 0.5;
+/// Sizes tried, largest first, for a feather that cannot lie down within
+/// the pitch limit.
+const SHRINK_STEPS: [f32; 8] = [0.85, 0.7, 0.6, 0.5, 0.4, 0.3, 0.22, 0.15];
+/// Sizes below this are rasterised again (see [`adjust_feather`]): the root
+/// socket, 2.5 % of the full length, is 5 % of a half-size feather.
+const REFILL_BELOW: f32 = 0.5;
 /// Rolls whose lateral slope is below this (about 0.3°) are not worth a
 /// second pitch search: the feather stays unrolled.
 const MIN_LATERAL_SLOPE: f32 = 0.005;
@@ -61,25 +68,104 @@ pub fn adjust_feather(
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
     scratch.set_resolution(params.height_field_u, params.height_field_v);
-    scratch.reset(shape, params.min_pitch);
+    let collision_tests = fill_field(scratch, frame, shape, obstacles, body, params);
+    let mut choice = choose_pose(scratch, previous, params, steps);
+    // The height field is conservative but coarse, and blind to what it
+    // leaves out (skin facing away, such as a wing hanging over the body;
+    // feathers of the opposite skin). So every chosen pose is checked with
+    // the exact tests of the validation against the obstacles and the
+    // body. A feather that would have to stand steeper than the pitch
+    // limit, or fails the check, is shortened instead, largest size first,
+    // and is left out (size 0) when no size down to the smallest fits.
+    // Down to `REFILL_BELOW` the filled field serves as it is (the shorter
+    // kite covers a subset of it, and the root socket stays within the
+    // validation's allowance); smaller sizes are rasterised again over
+    // their own footprint.
+    let mut sizes = SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale);
+    let clamped;
+    loop {
+        let fits = !choice.too_steep && clear_of_everything(frame, shape, choice.pose, obstacles, body, scratch);
+        if fits {
+            clamped = choice.clamped;
+            break;
+        }
+        let Some(scale) = sizes.next() else {
+            // Not even the smallest size fits (a root deep in a crease,
+            // the rim of a blade-thin part): the feather is not grown.
+            choice.pose.scale = 0.0;
+            clamped = true;
+            break;
+        };
+        let small = shape.scaled(scale);
+        if scale < REFILL_BELOW {
+            fill_field(scratch, frame, &small, obstacles, body, params);
+        } else {
+            scratch.shape = small;
+        }
+        choice = choose_pose(scratch, previous, params, steps);
+        choice.pose.scale = scale;
+    }
+    AdjustOutcome { pose: choice.pose, collision_tests, clamped }
+}
+
+/// The exact check of a chosen pose: the feather's triangles meet no
+/// obstacle's, and it does not penetrate the body beyond its root socket
+/// (the tests of [`crate::validation`]).
+fn clear_of_everything(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+) -> bool {
+    let mine = feather_triangles(frame, shape, pose);
+    if obstacles.iter().any(|o| feathers_intersect(&mine, &o.triangles)) {
+        return false;
+    }
+    !penetrates_body(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids)
+}
+
+/// Clears `field` over `shape`'s footprint and rasterises the obstacles and
+/// the body near the root. Returns the obstacles that touched it.
+fn fill_field(
+    field: &mut HeightField,
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    obstacles: &[ObstacleFeather],
+    body: &BodyIndex,
+    params: &AdjustParams,
+) -> u32 {
+    field.reset(shape, params.min_pitch);
     let mut collision_tests = 0u32;
-    for o in obstacles {
-        if scratch.add_obstacle(frame, &o.triangles, o.thickness) {
+    for o in obstacles.iter().filter(|o| !o.far_side) {
+        if field.add_obstacle(frame, &o.triangles, o.thickness) {
             collision_tests += 1;
         }
     }
-    scratch.add_body(frame, body);
-    let (pose, clamped) = choose_pose(scratch, previous, params, steps);
-    AdjustOutcome { pose, collision_tests, clamped }
+    field.add_body(frame, body);
+    collision_tests
 }
 
-/// Runs the steps on a filled field. Returns the pose and whether a limit bound.
+/// What the steps chose for one feather size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PoseChoice {
+    /// The pose (full size; the caller sets the scale).
+    pub(crate) pose: FeatherPose,
+    /// Whether a pitch or roll limit bound.
+    pub(crate) clamped: bool,
+    /// Whether the feather needs more than the highest pitch to clear
+    /// everything (before any fluffiness).
+    pub(crate) too_steep: bool,
+}
+
+/// Runs the steps on a filled field, for the field's shape.
 pub(crate) fn choose_pose(
     field: &mut HeightField,
     previous: FeatherPose,
     params: &AdjustParams,
     steps: AdjustSteps,
-) -> (FeatherPose, bool) {
+) -> PoseChoice {
     let (p_lo, p_hi) = (params.min_pitch.tan(), params.max_pitch.tan());
     let max_roll = params.max_roll.abs();
     let mut clamped = false;
@@ -138,7 +224,7 @@ pub(crate) fn choose_pose(
         clamped = true;
     }
     let pitch = pitch.clamp(params.min_pitch, params.max_pitch);
-    (FeatherPose { pitch, roll }, clamped)
+    PoseChoice { pose: FeatherPose::new(pitch, roll), clamped, too_steep: m3.steep }
 }
 
 impl HeightField {
@@ -276,15 +362,15 @@ impl HeightField {
                 }
             }
             if need <= p {
-                return MinPitch { p, bound: jump == 0, binding };
+                return MinPitch { p, bound: jump == 0, steep: false, binding };
             }
             if need > p_hi {
-                return MinPitch { p: p_hi, bound: true, binding: None };
+                return MinPitch { p: p_hi, bound: true, steep: true, binding: None };
             }
             binding = need_cell;
             p = need.max(p + 1e-6 * (1.0 + p.abs()));
         }
-        MinPitch { p: p.min(p_hi), bound: true, binding: None }
+        MinPitch { p: p.min(p_hi), bound: true, steep: true, binding: None }
     }
 
     /// The requirement `p_req` of a cell near the root, where the kite is
@@ -578,6 +664,8 @@ pub(crate) struct MinPitch {
     pub(crate) p: f32,
     /// Whether a pitch limit bound.
     pub(crate) bound: bool,
+    /// Whether no pitch up to the highest one is clear.
+    pub(crate) steep: bool,
     /// The cell that set the final pitch, if one did.
     pub(crate) binding: Option<Binding>,
 }
@@ -691,7 +779,11 @@ mod tests {
                 .map(|_| {
                     let at = frame_at(0.3 + 2.5 * rng.next_f32(), 2.4 * rng.next_f32() - 1.2);
                     let pose = FeatherPose::new(0.2 * rng.next_f32(), 0.2 * rng.next_f32() - 0.1);
-                    ObstacleFeather { triangles: feather_triangles(&at, &shape, pose), thickness: shape.thickness }
+                    ObstacleFeather {
+                        triangles: feather_triangles(&at, &shape, pose),
+                        thickness: shape.thickness,
+                        far_side: false,
+                    }
                 })
                 .collect();
             let run = |steps, field: &mut HeightField| {
@@ -719,8 +811,11 @@ mod tests {
         // A feather hovering right over the root, half a length up.
         let mut other = frame_at(-0.5, 0.0);
         other.position.z = 0.3;
-        let obstacle =
-            ObstacleFeather { triangles: feather_triangles(&other, &shape, FeatherPose::default()), thickness: 0.1 };
+        let obstacle = ObstacleFeather {
+            triangles: feather_triangles(&other, &shape, FeatherPose::default()),
+            thickness: 0.1,
+            far_side: false,
+        };
         let out = adjust(&frame_at(0.0, 0.0), &[obstacle], &body, &params);
         assert!(out.clamped);
         assert!((out.pose.pitch - params.max_pitch).abs() < 1e-6);

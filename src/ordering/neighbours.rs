@@ -10,8 +10,10 @@
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
-//! (`n_i·n_j < min_normal_dot`) are never neighbours, pairs or obstacle
-//! candidates of each other.
+//! (`n_i·n_j < min_normal_dot`) are never neighbours or pairs of each other
+//! (their order says nothing). They stay obstacle candidates: a feather
+//! reaching round the rim of a wing can meet one from the other skin, and
+//! the adjustment checks those exactly.
 
 use super::kd_tree::KdTree;
 use crate::error::{Error, ErrorKind, Result};
@@ -72,7 +74,7 @@ impl Neighbourhoods {
         self.tree.rebuild(frames.iter().map(|f| f.position));
         self.rebuild_nearest(frames, params);
         self.rebuild_pairs(frames.len());
-        self.rebuild_obstacles(frames, reach, params);
+        self.rebuild_obstacles(frames, reach);
     }
 
     /// Number of roots of the last rebuild.
@@ -169,10 +171,10 @@ impl Neighbourhoods {
 
     /// Obstacle candidates: one radius query per root, in tree order, into
     /// scratch rows; then a transpose. The relation is symmetric bitwise
-    /// (distances, `reach_i + reach_j` and the normal test all commute, and
+    /// (distances and `reach_i + reach_j` commute, and
     /// the tree query is exact), so the transpose of the scratch rows is the
     /// same relation with every row sorted by index, without sorting.
-    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32]) {
         let n = frames.len();
         self.obstacle_offsets.clear();
         self.obstacle_offsets.push(0);
@@ -185,10 +187,7 @@ impl Neighbourhoods {
                 let indices = &mut self.scratch_indices;
                 self.tree.within(frame.position, bound * bound, &mut |j, d2| {
                     let limit = reach_i + sanitized_reach(reach[j as usize]);
-                    if j as usize != i
-                        && d2 <= limit * limit
-                        && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
-                    {
+                    if j as usize != i && d2 <= limit * limit {
                         indices.push(j);
                     }
                 });

@@ -10,7 +10,7 @@ use super::grid::StaticGrid;
 use crate::field::Fields;
 use crate::geometry::{RootFrame, SurfacePoint};
 use crate::rng::hash64;
-use crate::roots::{RootBinding, pose_roots};
+use crate::roots::{RootBinding, RootNormal, pose_roots};
 use crate::surface::{NearbyPatch, Surface};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -72,7 +72,7 @@ pub fn sampling_metrics(
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
     let mut frames = Vec::new();
-    pose_roots(roots, positions, surface.triangles(), &normals, &mut frames);
+    pose_roots(roots, positions, surface.triangles(), &normals, RootNormal::Smooth, &mut frames);
     // Cells of 1.5 d: a query of radius 3 d reads about 5 cells a side.
     let cell = 1.5 * spacing.max(f32::MIN_POSITIVE) * fields.median_spacing_scale();
     let grid = StaticGrid::new(&frames.iter().map(|f| f.position).collect::<Vec<_>>(), cell);

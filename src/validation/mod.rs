@@ -71,7 +71,8 @@ fn feather_grid(feather_triangles: &[[[Vec3; 3]; 2]]) -> TriangleGrid {
 
 /// Pairs of distinct feathers whose triangles intersect (exact test, see
 /// [`triangles_intersect`]); any two feathers are compared, not only
-/// neighbours. Sorted, without repeats.
+/// neighbours. Feathers left out (size 0, all corners at the root) meet
+/// nothing. Sorted, without repeats.
 pub fn intersecting_pairs(feather_triangles: &[[[Vec3; 3]; 2]]) -> Vec<(u32, u32)> {
     intersecting_pairs_in(&feather_grid(feather_triangles))
 }
@@ -90,7 +91,7 @@ fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
                         continue;
                     }
                     let bb = grid.bounds(tb);
-                    if !ba.overlaps(&bb) || grid.first_shared_cell(ta, tb) != cell {
+                    if !ba.overlaps(&bb) || grid.first_shared_cell(ta, tb) != cell || ba.is_point() || bb.is_point() {
                         continue;
                     }
                     if triangles_intersect(&grid.corners(ta), &grid.corners(tb)) {
@@ -110,14 +111,20 @@ fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
 /// the root along the posed shaft, as up to four triangles (each vane
 /// clipped to a quadrilateral).
 pub fn feather_beyond_root(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Vec<[Vec3; 3]> {
+    let mut out = Vec::with_capacity(4);
+    feather_beyond_root_into(frame, shape, pose, &mut out);
+    out
+}
+
+/// [`feather_beyond_root`] into a reused buffer (cleared first).
+fn feather_beyond_root_into(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose, out: &mut Vec<[Vec3; 3]>) {
+    out.clear();
     let tris = crate::feather::feather_triangles(frame, shape, pose);
     let axis = shaft_direction(frame, pose);
-    let cut = ROOT_ALLOWANCE * shape.length;
-    let mut out = Vec::with_capacity(4);
+    let cut = ROOT_ALLOWANCE * shape.length * pose.scale;
     for t in &tris {
-        clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, &mut out);
+        clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, out);
     }
-    out
 }
 
 /// Clips a triangle to `side(p) ≥ 0` and appends the kept part as a fan.
@@ -155,26 +162,58 @@ pub fn body_penetrations(
 ) -> Vec<u32> {
     let hits: Vec<bool> = (0..frames.len())
         .into_par_iter()
-        .map_init(Vec::new, |ids, i| {
-            let part = feather_beyond_root(&frames[i], &shapes[i], poses[i]);
-            let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
-                return false;
-            };
-            body.triangles_in_box(&bounds, ids);
-            let crosses = ids.iter().any(|&t| {
-                let tri = body.corners(t);
-                part.iter().any(|p| triangles_intersect(p, &tri))
-            });
-            // Without a crossing each triangle lies on one side of the skin
-            // (the two vanes may lie on different sides, meeting it along
-            // the shaft): its first corner clearly off the skin tells which.
-            crosses
-                || part.iter().any(|t| {
-                    t.iter().find_map(|&p| side_of_skin(body, p, shapes[i].length, ids)).is_some_and(|under| under)
-                })
-        })
+        .map_init(
+            || (Vec::new(), Vec::new()),
+            |(part, ids), i| penetrates_body(&frames[i], &shapes[i], poses[i], body, part, ids),
+        )
         .collect();
     hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
+}
+
+/// Whether one feather penetrates the body more than 5 % of its length from
+/// the root (the test of [`body_penetrations`]). `part` and `ids` are
+/// scratch buffers.
+pub(crate) fn penetrates_body(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    body: &BodyIndex,
+    part: &mut Vec<[Vec3; 3]>,
+    ids: &mut Vec<u32>,
+) -> bool {
+    if pose.scale <= 0.0 {
+        // A feather left out (size 0) is a point on the skin.
+        return false;
+    }
+    feather_beyond_root_into(frame, shape, pose, part);
+    let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
+        return false;
+    };
+    body.triangles_in_box(&bounds, ids);
+    let crosses = ids.iter().any(|&t| {
+        let tri = body.corners(t);
+        part.iter().any(|p| triangles_intersect(p, &tri))
+    });
+    // Without a crossing each triangle lies on one side of the skin (the two
+    // vanes may lie on different sides, meeting it along the shaft): its
+    // first corner clearly off the skin tells which.
+    crosses
+        || part
+            .iter()
+            .any(|t| t.iter().find_map(|&p| side_of_skin(body, p, shape.length, ids)).is_some_and(|under| under))
+}
+
+/// Whether two feathers' triangles intersect (the exact test of
+/// [`intersecting_pairs`], bounding boxes first).
+pub(crate) fn feathers_intersect(a: &[[Vec3; 3]; 2], b: &[[Vec3; 3]; 2]) -> bool {
+    let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
+    a.iter().any(|ta| {
+        let box_a = Aabb::of_triangle(ta);
+        !box_a.is_point()
+            && b.iter()
+                .zip(&boxes_b)
+                .any(|(tb, box_b)| !box_b.is_point() && box_a.overlaps(box_b) && triangles_intersect(ta, tb))
+    })
 }
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,

@@ -3,6 +3,11 @@
 //! blended with the node's (else the mesh's) default weights. Buffer data
 //! comes from the GLB's binary chunk only (the models embed everything).
 //!
+//! Like the C++ host, a model with animated meshes (skinned or morphed) is
+//! read as those meshes only: the Fox's four display bases are not part of
+//! the animal. A skinned mesh is read in its bind pose, where glTF ignores
+//! the node's own transform.
+//!
 //! The models live in `../shared/data` relative to the crate root (see
 //! [`data_dir`] for the override); when one
 //! is absent, [`load_model`] says so on stderr and returns `None`, and the
@@ -48,10 +53,22 @@ pub fn read_glb_with_weights(bytes: &[u8], weights: Option<(usize, &[f32])>) -> 
     let blob: Option<&[u8]> = gltf.blob.as_deref();
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next()).ok_or("no scene")?;
     let mut out = Shape::default();
+    let animated = |node: &gltf::Node| {
+        node.skin().is_some() || node.mesh().is_some_and(|m| m.primitives().any(|p| p.morph_targets().next().is_some()))
+    };
+    let mut all = Vec::new();
+    let mut stack: Vec<gltf::Node> = scene.nodes().collect();
+    while let Some(node) = stack.pop() {
+        stack.extend(node.children());
+        all.push(node);
+    }
+    let only_animated = all.iter().any(animated);
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
+        let wanted = !only_animated || animated(&node);
+        let placement = if node.skin().is_some() { Mat4::IDENTITY } else { world };
+        if let Some(mesh) = node.mesh().filter(|_| wanted) {
             let weights = match weights {
                 Some((index, w)) if index == node.index() => w,
                 _ => node.weights().or(mesh.weights()).unwrap_or(&[]),
@@ -60,7 +77,7 @@ pub fn read_glb_with_weights(bytes: &[u8], weights: Option<(usize, &[f32])>) -> 
                 if primitive.mode() != gltf::mesh::Mode::Triangles {
                     continue;
                 }
-                append_primitive(&mut out, &primitive, blob, weights, world)?;
+                append_primitive(&mut out, &primitive, blob, weights, placement)?;
             }
         }
         stack.extend(node.children().map(|c| (c, world)));
