@@ -298,6 +298,15 @@ typedef struct PlumageConfig {
    * Passed back to `progress` unchanged.
    */
   void *progress_user_data;
+  /**
+   * Non-zero: without hints, the orientation field flows away from
+   * `flow_source` along the surface (default 0: it follows `flow_axis`).
+   */
+  uint32_t flow_source_enabled;
+  /**
+   * Where the derived flow starts (e.g. the beak tip), in model units.
+   */
+  float flow_source[3];
 } PlumageConfig;
 
 /**

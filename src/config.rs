@@ -69,8 +69,16 @@ pub struct Config {
     /// Propagation threshold θs (radians): a readjusted feather whose pitch
     /// or roll moved more than this makes its dependants readjust too.
     pub theta_s: f32,
-    /// Flow axis used to derive the orientation field when the mesh gives no hints.
+    /// Flow axis used to derive the orientation field when the mesh gives no
+    /// hints and `flow_source` is unset.
     pub flow_axis: Vec3,
+    /// Where the derived orientation field starts, when set (and the mesh
+    /// gives no hints): feathers then point away from the mesh vertex
+    /// nearest this point along the surface, e.g. from the beak tip down the
+    /// neck, along the body and out to the tip of every wing, leg and tail.
+    /// A constant `flow_axis` instead starts a flow at every rim that faces
+    /// it (a wing's leading edge), where no feather can cover the rim.
+    pub flow_source: Option<Vec3>,
     /// Recompute neighbourhoods and obstacle sets at the current pose each
     /// frame (beyond the paper, its Fig. 8 limitation).
     pub recompute_neighbourhoods: bool,
@@ -100,6 +108,7 @@ impl Default for Config {
             collision_allowance: 0.0,
             theta_s: 0.05,
             flow_axis: Vec3::X,
+            flow_source: None,
             recompute_neighbourhoods: true,
         }
     }
@@ -154,6 +163,9 @@ impl Config {
         }
         if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
             return bad(format!("config.flow_axis must be finite and non-zero (got {:?})", self.flow_axis));
+        }
+        if let Some(p) = self.flow_source.filter(|p| !p.is_finite()) {
+            return bad(format!("config.flow_source must be finite (got {p:?})"));
         }
         Ok(())
     }

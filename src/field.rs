@@ -71,7 +71,11 @@ impl Fields {
                 if !axis.is_finite() || axis.length_squared() == 0.0 {
                     return Err(Error::new(ErrorKind::InvalidArgument, "config.flow_axis must be finite and non-zero"));
                 }
-                let mut dirs = project_onto_tangent_planes(&vec![axis; n], normals);
+                let flow = match config.flow_source {
+                    Some(source) => flow_from_source(mesh, surface, source, axis),
+                    None => vec![axis; n],
+                };
+                let mut dirs = project_onto_tangent_planes(&flow, normals);
                 fill_from_neighbours(surface, normals, &mut dirs);
                 let dirs = dirs.into_iter().map(Option::unwrap).collect();
                 smooth_directions(surface, normals, dirs, SMOOTHING_ITERATIONS)
@@ -182,6 +186,49 @@ fn check_values(name: &str, values: &[f32], expected: usize, non_negative: bool)
         }
     }
     Ok(())
+}
+
+/// Per vertex, the direction in which the surface distance from the vertex
+/// nearest `source` grows fastest (a least-squares gradient over the
+/// vertex's edges; distances along mesh edges, by Dijkstra). Vertices the
+/// source cannot reach (another component) get `axis`.
+fn flow_from_source(mesh: &WeldedMesh, surface: &Surface, source: Vec3, axis: Vec3) -> Vec<Vec3> {
+    use petgraph::graph::{NodeIndex, UnGraph};
+    let p = &mesh.positions;
+    let n = p.len();
+    let mut graph = UnGraph::<(), f32>::with_capacity(n, surface.edge_count());
+    for _ in 0..n {
+        graph.add_node(());
+    }
+    for e in 0..surface.edge_count() {
+        let [a, b] = surface.edge_vertices(e);
+        graph.add_edge(NodeIndex::new(a as usize), NodeIndex::new(b as usize), p[a as usize].distance(p[b as usize]));
+    }
+    // The nearest vertex, lowest index on ties.
+    let start = (0..n).min_by(|&a, &b| p[a].distance_squared(source).total_cmp(&p[b].distance_squared(source)));
+    let Some(start) = start else { return Vec::new() };
+    let found = petgraph::algo::dijkstra(&graph, NodeIndex::new(start), None, |e| *e.weight());
+    let mut distance = vec![f32::INFINITY; n];
+    for (node, d) in found {
+        distance[node.index()] = d;
+    }
+    (0..n)
+        .map(|v| {
+            if !distance[v].is_finite() {
+                return axis;
+            }
+            let gradient =
+                surface.vertex_neighbours(v).iter().map(|&u| u as usize).filter(|&u| distance[u].is_finite()).fold(
+                    Vec3::ZERO,
+                    |g, u| {
+                        let edge = p[u] - p[v];
+                        let len2 = edge.length_squared();
+                        if len2 > 0.0 { g + edge * ((distance[u] - distance[v]) / len2) } else { g }
+                    },
+                );
+            gradient.try_normalize().unwrap_or(Vec3::ZERO)
+        })
+        .collect()
 }
 
 /// Each vector projected onto its vertex's tangent plane and normalised;

@@ -375,6 +375,7 @@ impl System {
             collision_allowance,
             theta_s,
             flow_axis,
+            flow_source,
             recompute_neighbourhoods,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
@@ -394,6 +395,7 @@ impl System {
             *height_field_u as u64,
             *height_field_v as u64,
             u64::from(*recompute_neighbourhoods),
+            u64::from(flow_source.is_some()),
         ];
         words.extend(
             [
@@ -415,6 +417,7 @@ impl System {
             ]
             .map(bits),
         );
+        words.extend(flow_source.unwrap_or(Vec3::ZERO).to_array().map(bits));
         let mesh = &self.mesh;
         words.push(mesh.caller_vertex_count() as u64);
         words.push(mesh.positions.len() as u64);

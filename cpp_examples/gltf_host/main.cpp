@@ -38,6 +38,10 @@ PlumageConfig make_config(const Options& opt) {
     if (opt.theta_deg) cfg.theta = static_cast<float>(*opt.theta_deg * kPi / 180.0);
     if (opt.seed) cfg.seed = *opt.seed;
     if (opt.flow) std::copy(opt.flow->begin(), opt.flow->end(), cfg.flow_axis);
+    if (opt.flow_source) {
+        cfg.flow_source_enabled = 1;
+        std::copy(opt.flow_source->begin(), opt.flow_source->end(), cfg.flow_source);
+    }
     if (opt.mode) cfg.mode = *opt.mode;
     if (opt.threads) cfg.threads = *opt.threads;
     return cfg;

@@ -62,7 +62,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--mode",    "--threads",  "--validate", "--out", "--report"};
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -101,6 +101,7 @@ std::string usage_text() {
            "  --frames N           frames to step (default: the whole clip); 0 = rest pose only\n"
            "  --feathers N         target feather count (or --spacing D: root spacing in model units)\n"
            "  --sampler guided|random   --theta DEG   --seed S   --flow X,Y,Z\n"
+           "  --flow-source X,Y,Z  feathers flow away from this point along the surface (e.g. the head)\n"
            "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
@@ -151,6 +152,7 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--theta") o.theta_deg = parse_float(arg, value);
         else if (arg == "--seed") o.seed = parse_unsigned(arg, value, UINT64_MAX);
         else if (arg == "--flow") o.flow = parse_vector(arg, value);
+        else if (arg == "--flow-source") o.flow_source = parse_vector(arg, value);
         else if (arg == "--mode") {
             o.mode = parse_choice(arg, value, {"incremental", "legacy", "rebuild"}, {PLUMAGE_MODE_INCREMENTAL, PLUMAGE_MODE_LEGACY, PLUMAGE_MODE_REBUILD});
         } else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));

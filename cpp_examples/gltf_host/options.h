@@ -23,6 +23,7 @@ struct Options {
     std::optional<float> theta_deg;
     std::optional<uint64_t> seed;
     std::optional<std::array<float, 3>> flow;
+    std::optional<std::array<float, 3>> flow_source;
     std::optional<uint32_t> mode;
     std::optional<uint32_t> threads;
     ValidateWhen validate = ValidateWhen::Last;

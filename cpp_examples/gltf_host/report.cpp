@@ -81,6 +81,8 @@ json config_to_json(const PlumageConfig& c) {
               {"theta_s", tidy(c.theta_s)},
               {"flow_axis", {tidy(c.flow_axis[0]), tidy(c.flow_axis[1]), tidy(c.flow_axis[2])}},
               {"recompute_neighbourhoods", c.recompute_neighbourhoods != 0}};
+    if (c.flow_source_enabled != 0)
+        j["flow_source"] = {tidy(c.flow_source[0]), tidy(c.flow_source[1]), tidy(c.flow_source[2])};
     return j;
 }
 

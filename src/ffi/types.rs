@@ -75,6 +75,11 @@ pub struct PlumageConfig {
     pub progress: PlumageProgressFn,
     /// Passed back to `progress` unchanged.
     pub progress_user_data: *mut c_void,
+    /// Non-zero: without hints, the orientation field flows away from
+    /// `flow_source` along the surface (default 0: it follows `flow_axis`).
+    pub flow_source_enabled: u32,
+    /// Where the derived flow starts (e.g. the beak tip), in model units.
+    pub flow_source: [f32; 3],
 }
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
@@ -209,6 +214,8 @@ impl PlumageConfig {
             recompute_neighbourhoods: c.recompute_neighbourhoods as u32,
             progress: None,
             progress_user_data: std::ptr::null_mut(),
+            flow_source_enabled: u32::from(c.flow_source.is_some()),
+            flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
         }
     }
 
@@ -243,7 +250,7 @@ impl PlumageConfig {
             self.collision_allowance,
             self.theta_s,
         ];
-        if floats.iter().chain(&self.flow_axis).any(|x| !x.is_finite()) {
+        if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
         }
         let cfg = Config {
@@ -269,6 +276,7 @@ impl PlumageConfig {
             theta_s: self.theta_s,
             flow_axis: Vec3::from_array(self.flow_axis),
             recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
+            flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
         };
         cfg.validate()?;
         Ok(cfg)
