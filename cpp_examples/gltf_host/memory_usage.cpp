@@ -25,8 +25,9 @@ MemoryUsage memory_usage() {
         if (in >> kib >> unit && unit == "kB") *field = kib;
     }
 #ifdef PLUMAGE_HAVE_MALLINFO2
+    // A replaced malloc (AddressSanitizer's, for one) answers with zeros: no figure then.
     const struct mallinfo2 info = mallinfo2();
-    m.heap_kib = (info.uordblks + info.hblkhd) / 1024;
+    if (info.uordblks + info.hblkhd > 0) m.heap_kib = (info.uordblks + info.hblkhd) / 1024;
 #endif
     return m;
 }

@@ -2,7 +2,8 @@
 // its peak (Linux: VmRSS and VmHWM of /proc/self/status) and the bytes the
 // allocator has handed out and not taken back (glibc: mallinfo2). The
 // library allocates through the same malloc, so both cover it and the host.
-// A figure the platform does not give is left empty.
+// A figure the platform does not give is left empty, and so is the heap
+// under a malloc that does not fill mallinfo2 (AddressSanitizer's).
 #pragma once
 
 #include <cstdint>
