@@ -3,7 +3,7 @@
 Markdown tables; scripts/bench.sh builds the host first and calls this.
 
 Sections (table, scaling and threads by default, in this order; memory only
-when named, as it takes about 6 to 9 minutes):
+when named, as it takes about 6 to 10 minutes):
   table    the paper's Table 1: every model (the three shared models and the
            built-in one) at about --feathers feathers, modes legacy,
            incremental and rebuild side by side, on --table-threads threads

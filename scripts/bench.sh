@@ -7,7 +7,7 @@
 #
 #   ./scripts/bench.sh                    # table, scaling, threads
 #   ./scripts/bench.sh table              # one section (table | scaling | threads | memory)
-#   ./scripts/bench.sh memory             # peak RSS and growth over 400 steps (6 to 9 min)
+#   ./scripts/bench.sh memory             # peak RSS and growth over 400 steps (6 to 10 min)
 #   ./scripts/bench.sh --frames 60 table  # options: ./scripts/bench.sh --help
 #
 # Models come from $PLUMAGE_DATA_DIR, else ../shared/data; missing ones are
