@@ -2,7 +2,8 @@
 """Runs the glTF host (plumage_gltf) over the benchmark cases and prints
 Markdown tables; scripts/bench.sh builds the host first and calls this.
 
-Sections (all by default, in this order):
+Sections (table, scaling and threads by default, in this order; memory only
+when named, as it takes about 6 to 10 minutes):
   table    the paper's Table 1: every model (the three shared models and the
            built-in one) at about --feathers feathers, modes legacy,
            incremental and rebuild side by side, on --table-threads threads
@@ -11,6 +12,13 @@ Sections (all by default, in this order):
   threads  the built-in model, incremental, at --threads-feathers feathers on
            1 and 2 threads: speed-up, and whether the .glb outputs are
            byte-identical (cmp)
+  memory   the built-in model at --memory-resolution (about 200 000
+           triangles) with about --memory-feathers feathers, incremental,
+           --memory-frames steps on --memory-threads threads: resident set
+           size and its peak after create and after the steps, and the
+           growth of RSS and of the live heap from step --memory-early to
+           the last (the host reads /proc/self/status and mallinfo2 after
+           every step)
 
 Every run has validation off (--validate none). Averages are over the
 frames after the first: frame 0 goes from the rest (bind) pose to the
@@ -205,9 +213,8 @@ def md_table(header, rows):
     return "\n".join(lines)
 
 
-def fit_exponent(xs, ys):
-    """Least-squares slope of log y on log x (None with fewer than 2 points)."""
-    pts = [(math.log(x), math.log(y)) for x, y in zip(xs, ys) if x and y and x > 0 and y > 0]
+def fit_slope(pts):
+    """Least-squares slope of y on x over (x, y) points (None with fewer than 2)."""
     if len(pts) < 2:
         return None
     mx = sum(p[0] for p in pts) / len(pts)
@@ -216,6 +223,11 @@ def fit_exponent(xs, ys):
     if sxx == 0:
         return None
     return sum((p[0] - mx) * (p[1] - my) for p in pts) / sxx
+
+
+def fit_exponent(xs, ys):
+    """Least-squares slope of log y on log x (None with fewer than 2 points)."""
+    return fit_slope([(math.log(x), math.log(y)) for x, y in zip(xs, ys) if x and y and x > 0 and y > 0])
 
 
 # ---- sections ---------------------------------------------------------------
@@ -379,6 +391,95 @@ def section_threads(opt, runner, out):
     return "\n".join(text)
 
 
+def mib(kib, digits=1):
+    return fmt(kib / 1024.0, digits) if kib is not None else "—"
+
+
+def section_memory(opt, runner, out):
+    rings, segments = opt.memory_resolution
+    log(f"== memory: built-in model at {rings},{segments} ({2 * segments * (rings - 2)} triangles), about {opt.memory_feathers} feathers, "
+        f"incremental, {opt.memory_threads} thread(s), {opt.memory_frames} steps")
+    args = ["--model-resolution", f"{rings},{segments}", "--feathers", str(opt.memory_feathers), "--frames", str(opt.memory_frames),
+            "--mode", "incremental", "--threads", str(opt.memory_threads), "--validate", "none"]
+    report, cmd = runner.run("memory", None, args)
+    if report is None:
+        out["memory"] = {"command": cmd, "failed": True}
+        return "### Memory\n\nThe host run failed: " + cmd
+    s = summarise(report)
+    phases = report.get("memory", {})
+    # Step k is the k-th call of plumage_system_step (frames[k - 1]).
+    steps = [{"step": f["index"] + 1, **{k: f.get(k) for k in ("rss_kib", "peak_rss_kib", "heap_kib")}} for f in report["frames"]]
+    n = len(steps)
+    early = min(opt.memory_early, n)
+    checkpoints = sorted({k for k in (1, 10, early, n) if 1 <= k <= n} | set(range(100, n + 1, 100)))
+    rows = [("after load", phases.get("after_load", {})), ("after create", phases.get("after_create", {}))]
+    rows += [(f"after step {k}", steps[k - 1]) for k in checkpoints]
+    m = {
+        "command": cmd,
+        "model_resolution": [rings, segments],
+        "vertices": report["vertices"],
+        "triangles": report["triangles"],
+        "feathers": report["feathers"],
+        "threads": opt.memory_threads,
+        "steps": n,
+        "early_step": early,
+        "create_seconds": s.get("create_seconds"),
+        "frame_ms": s.get("frame_ms"),
+        "process_wall_seconds": s["process_wall_seconds"],
+        "process_cpu_over_wall": s["process_cpu_over_wall"],
+        "after_load": phases.get("after_load"),
+        "after_create": phases.get("after_create"),
+        "after_steps": steps[-1] if steps else None,
+        "per_step": steps,
+    }
+    if n and early:
+        late = [x for x in steps if x["step"] >= early]
+        for key in ("rss_kib", "heap_kib"):
+            a, b = steps[early - 1].get(key), steps[-1].get(key)
+            pts = [(x["step"], x[key]) for x in late if x.get(key) is not None]
+            slope = fit_slope(pts)
+            m[f"{key}_growth_early_to_last"] = b - a if a is not None and b is not None else None
+            m[f"{key}_max_after_early_over_early"] = max(p[1] for p in pts) - a if pts and a is not None else None
+            m[f"{key}_slope_per_100_steps"] = 100 * slope if slope is not None else None
+    out["memory"] = m
+
+    def kib(v):
+        return "—" if v is None else f"{v:+,} KiB".replace(",", " ")
+
+    body = [[label, mib(r.get("rss_kib")), mib(r.get("peak_rss_kib")), mib(r.get("heap_kib"))] for label, r in rows]
+    text = [
+        f"### Memory: built-in model {rings},{segments} ({fmt(report['triangles'])} triangles), {fmt(report['feathers'])} feathers, "
+        f"incremental, {opt.memory_threads} thread(s), {n} steps, validation off",
+        "",
+        md_table(["point of the run", "RSS MiB", "peak RSS MiB", "live heap MiB"], body),
+        "",
+    ]
+    if n and early:
+        text += [
+            md_table(
+                [f"from step {early} to step {n}", "RSS", "live heap"],
+                [
+                    ["last minus early", kib(m["rss_kib_growth_early_to_last"]), kib(m["heap_kib_growth_early_to_last"])],
+                    ["highest minus early", kib(m["rss_kib_max_after_early_over_early"]), kib(m["heap_kib_max_after_early_over_early"])],
+                    ["least-squares slope per 100 steps", kib(None if m["rss_kib_slope_per_100_steps"] is None else round(m["rss_kib_slope_per_100_steps"])),
+                     kib(None if m["heap_kib_slope_per_100_steps"] is None else round(m["heap_kib_slope_per_100_steps"]))],
+                ],
+            ),
+            "",
+        ]
+    text.append(
+        "Read in-process by the host after each phase and after every step: RSS and peak RSS are VmRSS and VmHWM of "
+        "/proc/self/status (the whole process: library, host, the mesh and the report it keeps); live heap is glibc "
+        "mallinfo2 (in-use arena bytes plus mmapped blocks), which the library's allocations go through too. "
+        f"Create took {fmt(s.get('create_seconds'), 1)} s, a step {fmt(s.get('frame_ms'), 0)} ms on average "
+        f"(frame 0 left out); the run took {fmt(s['process_wall_seconds'], 0)} s at CPU / wall {fmt(s['process_cpu_over_wall'], 2)}. "
+        "The clip's wave repeats every second after the first half second, so the steps cycle through the same poses. "
+        "The host keeps its report in memory, one JSON entry more per step, so the live heap of the process grows by "
+        "that entry each step even when the library's does not."
+    )
+    return "\n".join(text)
+
+
 # ---- main -------------------------------------------------------------------
 
 
@@ -399,9 +500,18 @@ def int_list(text):
     return [int(x) for x in text.split(",") if x]
 
 
+def resolution(text):
+    rings, segments = int_list(text)
+    return rings, segments
+
+
+SECTIONS = {"table": section_table, "scaling": section_scaling, "threads": section_threads, "memory": section_memory}
+RESULTS = ("table1", "scaling", "threads", "memory")  # keys of `out` written as <key>.json
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("sections", nargs="*", metavar="section", help="table, scaling or threads (default: all three)")
+    p.add_argument("sections", nargs="*", metavar="section", help="table, scaling, threads or memory (default: table scaling threads)")
     p.add_argument("--host", default="build-bench/plumage_gltf", help="the plumage_gltf binary")
     p.add_argument("--data", default=os.environ.get("PLUMAGE_DATA_DIR", "../shared/data"), help="model directory (default $PLUMAGE_DATA_DIR, else ../shared/data)")
     p.add_argument("--out", default="out/bench", help="output directory (default out/bench)")
@@ -412,11 +522,17 @@ def main():
     p.add_argument("--scaling-feathers", type=int_list, default=[1000, 4000, 16000, 64000], help="comma-separated (default 1000,4000,16000,64000)")
     p.add_argument("--scaling-frames", type=int, default=10, help="frames of the scaling and threads runs (default 10)")
     p.add_argument("--threads-feathers", type=int_list, default=[10000, 16000], help="comma-separated (default 10000,16000)")
+    p.add_argument("--memory-resolution", type=resolution, default=(502, 200),
+                   help="RINGS,SEGMENTS of the built-in model in the memory run (default 502,200: 200 000 triangles)")
+    p.add_argument("--memory-feathers", type=int, default=50000, help="feathers in the memory run (default 50000)")
+    p.add_argument("--memory-frames", type=int, default=400, help="steps in the memory run (default 400: 0.8 to 1.3 s each on 2 shared cores)")
+    p.add_argument("--memory-threads", type=int, default=2, help="threads of the memory run (default 2)")
+    p.add_argument("--memory-early", type=int, default=100, help="the early step that memory growth is measured from (default 100)")
     opt = p.parse_args()
     sections = opt.sections or ["table", "scaling", "threads"]
     for name in sections:
-        if name not in ("table", "scaling", "threads"):
-            p.error(f"unknown section {name!r} (table, scaling or threads)")
+        if name not in SECTIONS:
+            p.error(f"unknown section {name!r} ({', '.join(SECTIONS)})")
     if not os.access(opt.host, os.X_OK):
         sys.exit(f"bench.py: {opt.host} is not an executable; run scripts/bench.sh, which builds it")
 
@@ -425,7 +541,7 @@ def main():
     started = time.monotonic()
     texts = []
     for name in sections:
-        texts.append({"table": section_table, "scaling": section_scaling, "threads": section_threads}[name](opt, runner, out))
+        texts.append(SECTIONS[name](opt, runner, out))
     out["machine"]["load_average_at_end"] = load_average()
     out["seconds"] = round(time.monotonic() - started, 1)
 
@@ -441,14 +557,14 @@ def main():
     print(markdown)
 
     os.makedirs(opt.out, exist_ok=True)
-    for key in ("table1", "scaling", "threads"):
+    for key in RESULTS:
         if key in out:
             with open(os.path.join(opt.out, key + ".json"), "w") as f:
                 json.dump({"machine": out["machine"], key: out[key]}, f, indent=2)
                 f.write("\n")
     with open(os.path.join(opt.out, "bench.md"), "w") as f:
         f.write(markdown)
-    log(f"wrote {opt.out}/bench.md and {', '.join(k + '.json' for k in ('table1', 'scaling', 'threads') if k in out)}")
+    log(f"wrote {opt.out}/bench.md and {', '.join(k + '.json' for k in RESULTS if k in out)}")
 
 
 if __name__ == "__main__":

@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Benchmarks (issue 8): builds the glTF host in release and runs it over the
 # shared models and the built-in model, then prints Markdown tables (the
-# paper's Table 1, scaling in feather count, 1 vs 2 threads) and writes them
-# as JSON under out/bench/. Figures only: nothing here fails on speed.
+# paper's Table 1, scaling in feather count, 1 vs 2 threads, and on request
+# the memory of a 200 000-triangle, 50 000-feather run) and writes them as
+# JSON under out/bench/. Figures only: nothing here fails on speed.
 #
-#   ./scripts/bench.sh                    # everything (table, scaling, threads)
-#   ./scripts/bench.sh table              # one section (table | scaling | threads)
+#   ./scripts/bench.sh                    # table, scaling, threads
+#   ./scripts/bench.sh table              # one section (table | scaling | threads | memory)
+#   ./scripts/bench.sh memory             # peak RSS and growth over 400 steps (6 to 10 min)
 #   ./scripts/bench.sh --frames 60 table  # options: ./scripts/bench.sh --help
 #
 # Models come from $PLUMAGE_DATA_DIR, else ../shared/data; missing ones are

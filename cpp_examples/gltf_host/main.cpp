@@ -4,6 +4,7 @@
 #include "gltf_loader.h"
 #include "gltf_scene.h"
 #include "gltf_writer.h"
+#include "memory_usage.h"
 #include "options.h"
 #include "plumage_system.h"
 #include "procedural_model.h"
@@ -23,7 +24,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::unique_ptr<AnimatedMesh> open_subject(const Options& opt) {
     if (!opt.input.empty()) return std::make_unique<GltfScene>(load_gltf_file(opt.input), opt.mesh, opt.animation);
-    auto body = std::make_unique<ProceduralBody>();
+    const auto [rings, segments] = opt.model_resolution.value_or(std::array<uint32_t, 2>{ProceduralBody::kRings, ProceduralBody::kSegments});
+    auto body = std::make_unique<ProceduralBody>(static_cast<int>(rings), static_cast<int>(segments));
     if (!opt.mesh.empty() && opt.mesh != body->mesh_name() && opt.mesh != "0") throw UsageError("--mesh " + opt.mesh + ": the built-in model has one mesh, procedural_body");
     if (!opt.animation.empty() && opt.animation != "swim" && opt.animation != "0") throw UsageError("--animation " + opt.animation + ": the built-in model has one clip, swim");
     return body;
@@ -77,6 +79,7 @@ public:
         const Stopwatch load_clock;
         subject_ = open_subject(opt_);
         report_.set_timing("load_seconds", load_clock.seconds());
+        report_.set_memory("after_load", memory_usage());
         clip_ = subject_->clip();
         times_ = frame_times(opt_, clip_);
     }
@@ -91,6 +94,7 @@ public:
         const Stopwatch create_clock;
         sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles());
         report_.set_timing("create_seconds", create_clock.seconds());
+        report_.set_memory("after_create", memory_usage());
         check(plumage_system_feather_count(sys_.get(), &feather_count_), sys_.get(), "plumage_system_feather_count");
         report_.set_feathers(feather_count_);
         report_.set_sampling(sampling_stats(*sys_));
@@ -111,8 +115,8 @@ public:
             step_total_ += step_seconds;
             // Validation and copies happen after the clock stopped: not step time.
             const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
-            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v);
             if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_triangles(*sys_));
+            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage());
             progress_.frame_done(k + 1, times_.size(), step_seconds);
         }
         progress_.clear();

@@ -11,6 +11,8 @@
 namespace plumage_host {
 namespace {
 
+constexpr uint64_t kMaxResolution = 4096;  // 2 * 4096 * 4094 triangles at most
+
 [[noreturn]] void bad(const std::string& option, const std::string& value, const std::string& want) {
     throw UsageError(option + " " + value + ": expected " + want);
 }
@@ -38,14 +40,33 @@ float parse_float(const std::string& option, const std::string& text) {
     return static_cast<float>(v);
 }
 
-std::array<float, 3> parse_vector(const std::string& option, const std::string& text) {
-    std::array<float, 3> v{};
+// Exactly N comma-separated fields (`want` names them in the error).
+template <size_t N>
+std::array<std::string, N> split_fields(const std::string& option, const std::string& text, const char* want) {
+    std::array<std::string, N> fields;
     size_t start = 0;
-    for (size_t i = 0; i < 3; ++i) {
+    for (size_t i = 0; i < N; ++i) {
         const size_t comma = text.find(',', start);
-        if ((i < 2) != (comma != std::string::npos)) bad(option, text, "X,Y,Z");
-        v[i] = parse_float(option, text.substr(start, i < 2 ? comma - start : std::string::npos));
+        if ((i + 1 < N) != (comma != std::string::npos)) bad(option, text, want);
+        fields[i] = text.substr(start, i + 1 < N ? comma - start : std::string::npos);
         start = comma + 1;
+    }
+    return fields;
+}
+
+std::array<float, 3> parse_vector(const std::string& option, const std::string& text) {
+    const std::array<std::string, 3> f = split_fields<3>(option, text, "X,Y,Z");
+    return {parse_float(option, f[0]), parse_float(option, f[1]), parse_float(option, f[2])};
+}
+
+// RINGS,SEGMENTS of the built-in model, each from 3 to kMaxResolution.
+std::array<uint32_t, 2> parse_resolution(const std::string& option, const std::string& text) {
+    const std::array<std::string, 2> f = split_fields<2>(option, text, "RINGS,SEGMENTS");
+    std::array<uint32_t, 2> v{};
+    for (size_t i = 0; i < 2; ++i) {
+        const uint64_t n = parse_unsigned(option, f[i], UINT64_MAX);
+        if (n < 3 || n > kMaxResolution) bad(option, text, "RINGS,SEGMENTS, each from 3 to " + std::to_string(kMaxResolution));
+        v[i] = static_cast<uint32_t>(n);
     }
     return v;
 }
@@ -62,7 +83,8 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report"};
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
+                                           "--model-resolution"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -95,6 +117,8 @@ const char* mode_name(uint32_t mode) {
 std::string usage_text() {
     return "usage: plumage_gltf [INPUT.glb|INPUT.gltf] [options]\n"
            "  no INPUT             the built-in procedural model (a swimming body, 6016 triangles)\n"
+           "  --model-resolution RINGS,SEGMENTS   the built-in model's cross-sections along the body and vertices\n"
+           "                       around each (default 96,32); 2*SEGMENTS*(RINGS-2) triangles: 502,200 gives 200000\n"
            "  --mesh NAME|I        mesh to dress (default: the largest skinned or morphed mesh)\n"
            "  --animation NAME|I   clip to play (default 0)\n"
            "  --fps F              sampling rate of the clip (default 30)\n"
@@ -159,11 +183,13 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--validate") {
             const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});
             o.validate = v == 0 ? ValidateWhen::Every : v == 1 ? ValidateWhen::Last : ValidateWhen::None;
-        } else if (arg == "--out") o.out = value;
+        } else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
+        else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
+    if (o.model_resolution && !o.input.empty()) throw UsageError("--model-resolution applies to the built-in model only, not to " + o.input);
     return o;
 }
 

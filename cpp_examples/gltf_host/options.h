@@ -12,6 +12,7 @@ enum class ValidateWhen { Every, Last, None };
 
 struct Options {
     std::string input;  // empty: the built-in procedural model
+    std::optional<std::array<uint32_t, 2>> model_resolution;  // rings, segments of the built-in model
     std::string mesh;
     std::string animation;
     double fps = 30;

@@ -11,8 +11,9 @@ namespace plumage_host {
 
 class ProceduralBody final : public AnimatedMesh {
 public:
-    // `rings` cross-sections of `segments` vertices each (defaults: 6016 triangles).
-    explicit ProceduralBody(int rings = 96, int segments = 32);
+    // `rings` cross-sections of `segments` vertices each: 2 * segments * (rings - 2)
+    // triangles (defaults: 6016; plumage_gltf --model-resolution RINGS,SEGMENTS).
+    explicit ProceduralBody(int rings = kRings, int segments = kSegments);
 
     std::string mesh_name() const override { return "procedural_body"; }
     const std::vector<float>& rest_positions() const override { return rest_; }
@@ -21,6 +22,7 @@ public:
     void pose_at(double seconds, std::vector<float>& xyz) const override;
 
     static constexpr double kDuration = 2.0;
+    static constexpr int kRings = 96, kSegments = 32;  // the default resolution
 
 private:
     int rings_;

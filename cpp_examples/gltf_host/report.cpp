@@ -28,6 +28,13 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, mean_pitch_deg)) put(j, "mean_pitch_deg", v.mean_pitch_deg);
 }
 
+// The memory figures, shared by `memory` and each frame.
+void put_memory(json& j, const MemoryUsage& m) {
+    if (m.rss_kib) j["rss_kib"] = *m.rss_kib;
+    if (m.peak_rss_kib) j["peak_rss_kib"] = *m.peak_rss_kib;
+    if (m.heap_kib) j["heap_kib"] = *m.heap_kib;
+}
+
 // Mean, max or min of `key` over the frames that have it.
 std::optional<double> fold(const json& frames, const char* key, int how) {
     std::optional<double> acc;
@@ -120,7 +127,7 @@ void Report::set_static(const std::optional<PlumageFrameStats>& s, const std::op
 }
 
 void Report::add_frame(size_t index, double time, double step_seconds, const std::optional<PlumageFrameStats>& s,
-                       const std::optional<PlumageValidation>& v) {
+                       const std::optional<PlumageValidation>& v, const MemoryUsage& memory) {
     json f = {{"index", index}};
     put(f, "time", time);
     if (s) {
@@ -132,7 +139,14 @@ void Report::add_frame(size_t index, double time, double step_seconds, const std
     }
     put(f, "step_seconds", step_seconds);
     if (v) put_validation(f, *v);
+    put_memory(f, memory);
     frames_.push_back(std::move(f));
+}
+
+void Report::set_memory(const std::string& phase, const MemoryUsage& m) {
+    json j = json::object();
+    put_memory(j, m);
+    if (!j.empty()) memory_[phase] = std::move(j);
 }
 
 json Report::summary() const {
@@ -159,6 +173,7 @@ json Report::to_json() const {
     if (!sampling_.is_null()) j["sampling"] = sampling_;
     if (!ordering_.is_null()) j["ordering"] = ordering_;
     if (!static_.is_null()) j["static"] = static_;
+    if (!memory_.empty()) j["memory"] = memory_;
     j["frames"] = frames_;
     j["summary"] = summary();
     j["timing"] = timing_;

@@ -2,6 +2,7 @@
 // computed (its queries answer NOT_AVAILABLE) are left out, never invented.
 #pragma once
 
+#include "memory_usage.h"
 #include "plumage.h"
 
 #include <nlohmann/json.hpp>
@@ -21,9 +22,12 @@ public:
     void set_ordering(const std::optional<PlumageOrderingStats>& s);
     // The rest pose right after create: its adjustment and validation.
     void set_static(const std::optional<PlumageFrameStats>& s, const std::optional<PlumageValidation>& v);
-    // One stepped frame; step_seconds is the wall time of plumage_system_step.
+    // One stepped frame; step_seconds is the wall time of plumage_system_step,
+    // `memory` the process's memory right after it.
     void add_frame(size_t index, double time, double step_seconds, const std::optional<PlumageFrameStats>& s,
-                   const std::optional<PlumageValidation>& v);
+                   const std::optional<PlumageValidation>& v, const MemoryUsage& memory = {});
+    // The process's memory at a named point of the run ("after_load", "after_create").
+    void set_memory(const std::string& phase, const MemoryUsage& m);
     // Host-measured wall times of the run's phases.
     void set_timing(const std::string& key, double seconds) { timing_[key] = seconds; }
 
@@ -38,6 +42,7 @@ private:
     nlohmann::ordered_json sampling_;
     nlohmann::ordered_json ordering_;
     nlohmann::ordered_json static_;
+    nlohmann::ordered_json memory_ = nlohmann::ordered_json::object();
     nlohmann::ordered_json frames_ = nlohmann::ordered_json::array();
     nlohmann::ordered_json timing_ = nlohmann::ordered_json::object();
 };

@@ -445,15 +445,8 @@ void refusals() {
 
 // ---- the built-in model -------------------------------------------------
 
-void procedural_body() {
-    const plumage_host::ProceduralBody body;
-    CHECK(body.triangle_count() > 5000);
-    std::vector<float> start, later;
-    body.pose_at(0, start);
-    body.pose_at(1.0, later);
-    CHECK(start == body.rest_positions());
-    CHECK(later.size() == start.size() && later != start);
-    // Closed and wound outward: the signed volume is positive.
+// Closed and wound outward: the signed volume is positive.
+double signed_volume(const plumage_host::ProceduralBody& body) {
     double volume = 0;
     const std::vector<float>& p = body.rest_positions();
     const std::vector<uint32_t>& t = body.triangles();
@@ -463,7 +456,25 @@ void procedural_body() {
         const float* c = &p[3 * t[i + 2]];
         volume += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])) / 6.0;
     }
-    CHECK(volume > 0.5);
+    return volume;
+}
+
+void procedural_body() {
+    const plumage_host::ProceduralBody body;
+    CHECK(body.triangle_count() == 6016);
+    std::vector<float> start, later;
+    body.pose_at(0, start);
+    body.pose_at(1.0, later);
+    CHECK(start == body.rest_positions());
+    CHECK(later.size() == start.size() && later != start);
+    CHECK(signed_volume(body) > 0.5);
+    // Other resolutions (--model-resolution): 2 * segments * (rings - 2) triangles, the same closed body.
+    const plumage_host::ProceduralBody coarse(10, 8), fine(200, 100);
+    CHECK(coarse.triangle_count() == 128 && coarse.vertex_count() == 9 * 9 + 2);
+    CHECK(fine.triangle_count() == 39600);
+    coarse.pose_at(1.0, later);
+    CHECK(later.size() == coarse.rest_positions().size());
+    CHECK(signed_volume(coarse) > 0.3 && std::fabs(signed_volume(fine) - signed_volume(body)) < 0.02 * signed_volume(body));
 }
 
 const std::map<std::string, std::function<void()>> kCases = {

@@ -128,7 +128,34 @@ json check_report(const std::string& file, size_t frames) {
         if (r.contains(section)) CHECK_MSG(r[section].is_object() && !has_null(r[section]), section);
     }
     CHECK(!has_null(r["frames"]) && !has_null(r["summary"]));
+    if (r.contains("memory")) {
+        CHECK(r["memory"].is_object());
+        for (const json& phase : r["memory"]) CHECK(phase.is_object() && !phase.empty());
+    }
     return r;
+}
+
+// The process's memory, read by the host where the platform gives it (Linux, glibc).
+void check_memory(const json& r) {
+#if defined(__linux__)
+    for (const char* phase : {"after_load", "after_create"}) {
+        const json m = r.value("memory", json::object()).value(phase, json::object());
+        CHECK_MSG(m.contains("rss_kib") && m.contains("peak_rss_kib") && m["rss_kib"] <= m["peak_rss_kib"], phase);
+    }
+    const json& created = r["memory"]["after_create"];
+    CHECK(created["peak_rss_kib"] > r["memory"]["after_load"]["rss_kib"]);
+    for (const json& f : r["frames"]) {
+        CHECK(f.contains("rss_kib") && f.contains("peak_rss_kib") && f["rss_kib"] > 0 && f["rss_kib"] <= f["peak_rss_kib"]);
+        CHECK(f["peak_rss_kib"] >= created["peak_rss_kib"]);
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)  // AddressSanitizer's malloc leaves mallinfo2 empty
+        CHECK(f.contains("heap_kib") && f["heap_kib"] > 0);
+#else
+        CHECK(!f.contains("heap_kib") || f["heap_kib"] > 0);
+#endif
+    }
+#else
+    (void)r;
+#endif
 }
 
 // The .glb reads back with tinygltf: a body (and feathers) switching morph targets per frame.
@@ -183,7 +210,16 @@ json dress(const std::string& name, std::vector<std::string> args, size_t frames
 int builtin() {
     const json r = dress("builtin", {"--frames", "3", "--validate", "every"}, 3);
     CHECK(r.value("input", "") == "builtin:procedural_body");
-    CHECK(r.value("triangles", 0) > 5000);
+    CHECK(r.value("triangles", 0) == 6016);
+    check_memory(r);
+    return 0;
+}
+
+int model_resolution() {
+    const json r = dress("resolution", {"--model-resolution", "20,16", "--frames", "2", "--feathers", "300"}, 2);
+    CHECK(r.value("triangles", 0) == 2 * 16 * 18 && r.value("vertices", 0) == 19 * 17 + 2);
+    CHECK(r.value("feathers", 0) > 0);
+    check_memory(r);
     return 0;
 }
 
@@ -279,6 +315,10 @@ int bad_options() {
         {{"--out"}, "missing value"},
         {{"--mesh", "wing"}, "procedural_body"},
         {{"--animation", "fly"}, "swim"},
+        {{"--model-resolution", "2,8"}, "RINGS,SEGMENTS"},
+        {{"--model-resolution", "10"}, "RINGS,SEGMENTS"},
+        {{"--model-resolution", "10,5000"}, "--model-resolution"},
+        {{"in.glb", "--model-resolution", "10,8"}, "built-in model only"},
     };
     for (const auto& c : cases) EXPECT_REFUSAL(run_host(c.first), 2, c.second);
     return 0;
@@ -306,6 +346,7 @@ int help() {
 const std::map<std::string, std::function<int()>> kScenarios = {
     {"builtin", builtin},
     {"rest_only", rest_only},
+    {"model_resolution", model_resolution},
     {"flamingo", [] { return model("Flamingo.glb", "Mesh_0", 715); }},
     {"fox", [] { return model("Fox.glb", "Mesh", 1728); }},
     {"bird", [] { return model("bird.glb", "Plane", 338); }},

@@ -235,6 +235,29 @@ void report_summary() {
     CHECK(tidy(0.1f) == 0.1 && tidy(0.6f) == 0.6);
 }
 
+void report_memory() {
+    // Figures the platform gives are written, the others left out; a phase with none is left out whole.
+    Report r = subject();
+    MemoryUsage created;
+    created.rss_kib = 2048;
+    created.peak_rss_kib = 4096;
+    r.set_memory("after_load", MemoryUsage{});
+    r.set_memory("after_create", created);
+    MemoryUsage stepped = created;
+    stepped.heap_kib = 1000;
+    r.add_frame(0, 0.0, 0.001, std::nullopt, std::nullopt, stepped);
+    r.add_frame(1, 1 / 30.0, 0.001, std::nullopt, std::nullopt);
+    const json j = r.to_json();
+    CHECK(j["memory"].size() == 1 && j["memory"]["after_create"] == json({{"rss_kib", 2048}, {"peak_rss_kib", 4096}}));
+    CHECK(j["frames"][0]["rss_kib"] == 2048 && j["frames"][0]["peak_rss_kib"] == 4096 && j["frames"][0]["heap_kib"] == 1000);
+    CHECK(!j["frames"][1].contains("rss_kib") && !j["frames"][1].contains("heap_kib"));
+    std::vector<std::string> keys;
+    for (auto it = j.begin(); it != j.end(); ++it) keys.push_back(it.key());
+    CHECK((keys == std::vector<std::string>{"schema", "input", "mesh", "vertices", "triangles", "feathers", "config", "memory", "frames", "summary",
+                                            "timing"}));
+    CHECK(memory_usage().rss_kib.has_value() == std::filesystem::exists("/proc/self/status"));
+}
+
 const std::map<std::string, std::function<void()>> kCases = {
     {"glb_four_vertices_per_feather", glb_four_vertices_per_feather},
     {"glb_six_vertex_fallback", glb_six_vertex_fallback},
@@ -243,6 +266,7 @@ const std::map<std::string, std::function<void()>> kCases = {
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
     {"report_partial_struct", report_partial_struct},
     {"report_summary", report_summary},
+    {"report_memory", report_memory},
 };
 
 }  // namespace

@@ -1,0 +1,22 @@
+// The host process's memory, read in-process: resident set size now and at
+// its peak (Linux: VmRSS and VmHWM of /proc/self/status) and the bytes the
+// allocator has handed out and not taken back (glibc: mallinfo2). The
+// library allocates through the same malloc, so both cover it and the host.
+// A figure the platform does not give is left empty, and so is the heap
+// under a malloc that does not fill mallinfo2 (AddressSanitizer's).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+namespace plumage_host {
+
+struct MemoryUsage {
+    std::optional<uint64_t> rss_kib;       // resident now
+    std::optional<uint64_t> peak_rss_kib;  // highest resident so far
+    std::optional<uint64_t> heap_kib;      // live heap: in-use arena chunks plus mmapped blocks
+};
+
+MemoryUsage memory_usage();
+
+}  // namespace plumage_host
