@@ -394,11 +394,13 @@ typedef struct PlumageFeather {
    */
   float roll;
   /**
-   * Length along the shaft.
+   * Length along the shaft, as placed: a feather that cannot lie down
+   * within the pitch limit is shortened, and one that fits at no size is
+   * left out with length and width 0 (its triangles collapse to the root).
    */
   float length;
   /**
-   * Width across the vanes.
+   * Width across the vanes, as placed (shortened with the length).
    */
   float width;
   /**

@@ -106,9 +106,10 @@ pub struct FeatherRecord {
     pub pitch: f32,
     /// Roll, radians.
     pub roll: f32,
-    /// Feather length.
+    /// Feather length as placed (shortened where it could not lie down; 0
+    /// when left out).
     pub length: f32,
-    /// Feather width.
+    /// Feather width as placed.
     pub width: f32,
     /// Feather thickness.
     pub thickness: f32,

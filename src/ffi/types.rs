@@ -372,9 +372,11 @@ pub struct PlumageFeather {
     pub pitch: f32,
     /// Roll about the shaft, radians.
     pub roll: f32,
-    /// Length along the shaft.
+    /// Length along the shaft, as placed: a feather that cannot lie down
+    /// within the pitch limit is shortened, and one that fits at no size is
+    /// left out with length and width 0 (its triangles collapse to the root).
     pub length: f32,
-    /// Width across the vanes.
+    /// Width across the vanes, as placed (shortened with the length).
     pub width: f32,
     /// Thickness.
     pub thickness: f32,
