@@ -62,10 +62,7 @@ impl Footprint {
     /// `point` to the rectangle (0 inside).
     #[inline]
     pub fn distance2(&self, frame: &RootFrame, point: Vec3) -> f32 {
-        let local = frame.to_local(point);
-        let dx = (self.x_lo - local.x).max(local.x - self.x_hi).max(0.0);
-        let dy = (local.y.abs() - self.y_half).max(0.0);
-        dx * dx + dy * dy
+        Shadow::of(self, frame).distance2(point)
     }
 
     /// Whether a sphere may reach over the rectangle.
@@ -73,6 +70,50 @@ impl Footprint {
     pub fn reached_by(&self, frame: &RootFrame, sphere: Sphere) -> bool {
         self.distance2(frame, sphere.centre) <= sphere.radius * sphere.radius
     }
+}
+
+/// A footprint rectangle placed in world space at a frame: the tangent
+/// and binormal of the frame with the rectangle's centre and half sizes
+/// folded in, so that a point's distance to it costs two dot products.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Shadow {
+    tangent: Vec3,
+    binormal: Vec3,
+    x_centre: f32,
+    y_centre: f32,
+    x_half: f32,
+    y_half: f32,
+}
+
+impl Shadow {
+    fn of(footprint: &Footprint, frame: &RootFrame) -> Self {
+        let x_mid = 0.5 * (footprint.x_lo + footprint.x_hi);
+        Self {
+            tangent: frame.tangent,
+            binormal: frame.binormal,
+            x_centre: frame.tangent.dot(frame.position) + x_mid,
+            y_centre: frame.binormal.dot(frame.position),
+            x_half: 0.5 * (footprint.x_hi - footprint.x_lo),
+            y_half: footprint.y_half,
+        }
+    }
+
+    /// As [`Footprint::distance2`].
+    #[inline]
+    fn distance2(&self, point: Vec3) -> f32 {
+        let dx = ((self.tangent.dot(point) - self.x_centre).abs() - self.x_half).max(0.0);
+        let dy = ((self.binormal.dot(point) - self.y_centre).abs() - self.y_half).max(0.0);
+        dx * dx + dy * dy
+    }
+}
+
+/// A feather's sphere centre and squared radii without and with the pose
+/// margin, packed for the candidate loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Reach2 {
+    centre: Vec3,
+    touch: f32,
+    near: f32,
 }
 
 /// A sphere around a feather's triangles.
@@ -105,8 +146,9 @@ impl Sphere {
 #[derive(Clone, Debug, Default)]
 pub struct Contacts {
     footprints: Vec<Footprint>,
+    shadows: Vec<Shadow>,
     spheres: Vec<Sphere>,
-    reach2: Vec<[f32; 2]>,
+    reach2: Vec<Reach2>,
     owner: Vec<u32>,
     touch: Vec<u8>,
     offsets: Vec<u32>,
@@ -140,29 +182,34 @@ impl Contacts {
             self.footprints.extend(shapes.iter().map(|s| Footprint::of(s, params)));
         }
         self.spheres.resize(n, Sphere::default());
-        self.reach2.resize(n, [0.0; 2]);
-        self.spheres.par_iter_mut().zip(self.reach2.par_iter_mut()).enumerate().with_min_len(256).for_each(
-            |(i, (s, r2))| {
+        self.reach2.resize(n, Reach2::default());
+        self.shadows.resize(n, Shadow::default());
+        let footprints = &self.footprints;
+        self.spheres
+            .par_iter_mut()
+            .zip(self.reach2.par_iter_mut().zip(self.shadows.par_iter_mut()))
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (s, (r2, shadow)))| {
                 *s = Sphere::of(&frames[i], &shapes[i], poses[i]);
                 let grown = s.with_pose_margin(&shapes[i]).radius;
-                *r2 = [s.radius * s.radius, grown * grown];
-            },
-        );
+                *r2 = Reach2 { centre: s.centre, touch: s.radius * s.radius, near: grown * grown };
+                *shadow = Shadow::of(&footprints[i], &frames[i]);
+            });
         self.owner.clear();
         for i in 0..n {
             let len = (offsets[i + 1] - offsets[i]) as usize;
             self.owner.extend(std::iter::repeat_n(i as u32, len));
         }
-        let (footprints, spheres, reach2, owner) = (&self.footprints, &self.spheres, &self.reach2, &self.owner);
+        let (shadows, reach2, owner) = (&self.shadows, &self.reach2, &self.owner);
         self.touch.resize(indices.len(), APART);
         self.touch.par_chunks_mut(ENTRY_CHUNK).enumerate().for_each(|(chunk, out)| {
             let base = chunk * ENTRY_CHUNK;
             let entries = owner[base..base + out.len()].iter().zip(&indices[base..base + out.len()]);
             for (t, (&i, &j)) in out.iter_mut().zip(entries) {
-                let (i, j) = (i as usize, j as usize);
-                let d2 = footprints[i].distance2(&frames[i], spheres[j].centre);
-                let [r2, g2] = reach2[j];
-                *t = u8::from(d2 <= r2) + u8::from(d2 <= g2);
+                let r = &reach2[j as usize];
+                let d2 = shadows[i as usize].distance2(r.centre);
+                *t = u8::from(d2 <= r.touch) + u8::from(d2 <= r.near);
             }
         });
     }
