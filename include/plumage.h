@@ -279,7 +279,9 @@ typedef struct PlumageConfig {
    */
   float collision_allowance;
   /**
-   * Propagation threshold θs, radians (default 0.05).
+   * Propagation threshold θs, radians (default 0.05); a feather is also
+   * readjusted once what surrounds it moved, relative to it, by θs times
+   * its length.
    */
   float theta_s;
   /**
@@ -545,13 +547,15 @@ typedef struct PlumageFrameStats {
    */
   double step_seconds;
   /**
-   * Roots whose face deformed differently from a neighbour's since the
-   * previous frame (the paper's R_k); 0 after create and evaluate.
+   * Feathers whose surroundings moved relative to them, since they were
+   * last adjusted, by more than θs times their length (the paper's R_k);
+   * 0 after create and evaluate.
    */
   uint64_t deformed;
   /**
-   * Roots readjusted in any case (R*_k: R_k plus the roots the
-   * reordering touched); `adjusted` minus this came by propagation.
+   * Feathers readjusted in any case (R*_k: R_k plus those whose
+   * obstacles the reordering changed); `adjusted` minus this came by
+   * propagation.
    */
   uint64_t seeds;
 } PlumageFrameStats;

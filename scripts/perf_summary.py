@@ -24,7 +24,8 @@ PHASES = [
     ("create + rebuild frames: Coat::solve", "plumage::coat::Coat::solve"),
     ("frames: step_coat (incremental, legacy)", "plumage::animation::step::step_coat"),
     ("  pose_roots", "plumage::roots::pose_roots"),
-    ("  face maps + R_k (deform_differently)", "plumage::animation::affine::deform_differently"),
+    ("  contacts (Contacts::update)", "plumage::animation::contact::Contacts::update"),
+    ("  R_k (surroundings_displacement)", "plumage::animation::step::surroundings_displacement"),
     ("  Neighbourhoods::rebuild", "plumage::ordering::neighbours::Neighbourhoods::rebuild"),
     ("  PriorityOrder::update_frame", "plumage::ordering::dynamic_order::PriorityOrder::update_frame"),
     ("  PriorityOrder::build_static", "plumage::ordering::static_order::<impl plumage::ordering::dynamic_order::PriorityOrder>::build_static"),
@@ -46,7 +47,9 @@ def read_samples(stream):
     for line in stream:
         if not line.strip():
             continue
-        if not line.startswith("\t") and not line.startswith(" "):
+        # A sample starts with its thread id alone on a line (perf pads
+        # short ids with spaces); its frames follow, indented, as "ip sym".
+        if line.strip().isdigit():
             cur = []
             samples.append(cur)
         elif cur is not None:

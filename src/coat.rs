@@ -5,6 +5,7 @@
 //! `animation::step` and change a coat in place.
 
 use crate::adjustment::{AdjustParams, AdjustSteps, Adjuster, CandidateLists, Selection};
+use crate::animation::motion::Staleness;
 use crate::body::BodyIndex;
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
@@ -107,6 +108,8 @@ pub struct Coat {
     pub order: PriorityOrder,
     /// The body's triangles at the current pose, indexed.
     pub body: BodyIndex,
+    /// How far each feather's surroundings moved since it was last adjusted.
+    pub staleness: Staleness,
     /// 0 after creation, then one more per step.
     pub frame_index: u64,
     /// Figures of the last static order.
@@ -199,6 +202,7 @@ impl Coat {
         // A stopped adjustment (None) has set the progress's stop flag.
         progress.check(Phase::Adjusting, 1.0)?;
         let stats = stats.unwrap_or_default();
+        self.staleness.reset(dressing.len());
         self.frame_report = FrameReport {
             frame_index: self.frame_index,
             adjusted: stats.adjusted,
@@ -259,7 +263,8 @@ impl Coat {
 /// each); poses (u64 count, then pitch, roll and scale f32 each); the ordering
 /// report (four u64 counts, seconds f64); the frame report (frame index and
 /// nine counts as u64, three timings f64); the neighbourhoods
-/// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]).
+/// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]);
+/// the staleness ([`Staleness::write_state`]).
 impl Coat {
     /// Appends the coat's state to a state blob.
     pub fn write_state(&self, w: &mut Writer) {
@@ -301,6 +306,7 @@ impl Coat {
         [reorder_seconds, adjust_seconds, step_seconds].iter().for_each(|&s| w.f64(s));
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
+        self.staleness.write_state(w);
     }
 
     /// Reads a coat written by [`write_state`](Self::write_state) for
@@ -361,11 +367,20 @@ impl Coat {
         };
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
         let order = PriorityOrder::read_state(r, n)?;
+        let staleness = Staleness::read_state(r, n)?;
         if order.pairs() != neighbourhoods.pairs() {
             return Err(invalid_state("the saved order's pairs are not the saved neighbourhoods' pairs"));
         }
-        let mut coat =
-            Coat { poses, neighbourhoods, order, frame_index, ordering_report, frame_report, ..Coat::default() };
+        let mut coat = Coat {
+            poses,
+            neighbourhoods,
+            order,
+            staleness,
+            frame_index,
+            ordering_report,
+            frame_report,
+            ..Coat::default()
+        };
         coat.pose(dressing, &positions);
         coat.body.rebuild(&coat.positions, &dressing.triangles);
         Ok(coat)

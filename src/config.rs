@@ -67,7 +67,10 @@ pub struct Config {
     /// Allowed penetration into obstacles, as a fraction of feather thickness (≥ 0).
     pub collision_allowance: f32,
     /// Propagation threshold θs (radians): a readjusted feather whose pitch
-    /// or roll moved more than this makes its dependants readjust too.
+    /// or roll moved more than this makes the feathers lying on it readjust
+    /// too, and a feather whose surroundings moved relative to it by more
+    /// than θs times its length (as far as such a turn moves its tip) is
+    /// readjusted.
     pub theta_s: f32,
     /// Flow axis used to derive the orientation field when the mesh gives no
     /// hints and `flow_source` is unset.

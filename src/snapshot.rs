@@ -8,7 +8,7 @@ use crate::rng::mix64;
 
 const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
 /// Version of the payload layout; bump on any change.
-pub(crate) const FORMAT_VERSION: u32 = 2;
+pub(crate) const FORMAT_VERSION: u32 = 3;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 

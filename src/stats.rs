@@ -40,10 +40,13 @@ pub struct FrameReport {
     pub frame_index: u64,
     /// Feathers re-adjusted in this call.
     pub adjusted: usize,
-    /// Roots that deformed differently from a neighbour (the paper's `R_k`).
+    /// Feathers whose surroundings moved relative to them, since they were
+    /// last adjusted, by more than θs times their length (the paper's `R_k`,
+    /// see `animation::step`).
     pub deformed: usize,
-    /// Roots readjusted in any case (`R*_k`: `R_k` plus those the reordering
-    /// touched); the rest of `adjusted` came by propagation past θs.
+    /// Feathers readjusted in any case (`R*_k`: `R_k` plus those whose
+    /// obstacles the reordering changed); the rest of `adjusted` came by
+    /// propagation past θs.
     pub seeds: usize,
     /// Obstacle feathers rasterised in this call.
     pub collision_tests: u64,

@@ -27,6 +27,18 @@ fn rigid(p: [f32; 3], a: f32, b: f32, t: [f32; 3]) -> [f32; 3] {
     [r[0] + t[0], r[1] + t[1], r[2] + t[2]]
 }
 
+/// Points before the hinge line x = `hinge` fold up about it by `angle`;
+/// the rest stays.
+fn fold(shape: &Shape, hinge: f32, angle: f32) -> Vec<f32> {
+    map_points(shape, |p| {
+        if p[0] >= hinge {
+            return p;
+        }
+        let d = hinge - p[0];
+        [hinge - d * angle.cos(), p[1], p[2] + d * angle.sin()]
+    })
+}
+
 #[test]
 fn a_rigidly_moving_body_readjusts_nothing() {
     let plate = grid(10.0, 10.0, 30, 30, 0.0, true);
@@ -59,15 +71,7 @@ fn a_local_bend_readjusts_only_feathers_near_it() {
     let rest_x: Vec<f32> = sys.feathers().iter().map(|f| f.root[0]).collect();
     let hinge = 3.0f32;
     for k in 1..=4 {
-        let angle = 0.12 * k as f32;
-        // Points before the hinge line x = 3 fold up about it; the rest stays.
-        let frame = map_points(&plate, |p| {
-            if p[0] >= hinge {
-                return p;
-            }
-            let d = hinge - p[0];
-            [hinge - d * angle.cos(), p[1], p[2] + d * angle.sin()]
-        });
+        let frame = fold(&plate, hinge, 0.12 * k as f32);
         sys.step(&frame).unwrap();
         let touched: Vec<usize> = (0..n).filter(|&i| sys.readjusted()[i]).collect();
         assert!(!touched.is_empty(), "frame {k}: the bend readjusts something");
@@ -80,6 +84,26 @@ fn a_local_bend_readjusts_only_feathers_near_it() {
         let v = sys.validate().unwrap();
         assert_eq!(v.intersecting_pairs, 0, "frame {k}");
     }
+}
+
+#[test]
+fn a_slow_bend_is_caught_once_it_adds_up() {
+    // The region before x = 3 folds up a little more every frame: each
+    // step alone moves the feathers across the hinge far less than θs·L
+    // relative to each other, but the motion adds up until they readjust.
+    let plate = grid(10.0, 10.0, 40, 40, 0.0, true);
+    let mut sys = create(&plate, &plate_config(1200));
+    let hinge = 3.0f32;
+    let mut adjusted = Vec::new();
+    for k in 1..=30 {
+        let frame = fold(&plate, hinge, 0.004 * k as f32);
+        sys.step(&frame).unwrap();
+        adjusted.push(sys.frame_report().unwrap().adjusted);
+        assert_eq!(sys.validate().unwrap().intersecting_pairs, 0, "frame {k}");
+    }
+    println!("adjusted per frame under a slow bend: {adjusted:?}");
+    assert_eq!(adjusted[0], 0, "one small step alone readjusts nothing");
+    assert!(adjusted.iter().any(|&a| a > 0), "the accumulated bend is caught");
 }
 
 /// Two sheets side by side, the second sliding towards the first until

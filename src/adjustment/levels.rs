@@ -217,6 +217,10 @@ impl Adjuster {
         self.mark_scope(order, rank, candidates, selection);
         let levels = self.assign_levels(order, rank, candidates);
         self.prepare_workers(params);
+        // Room for the longest row up front: which rows a worker meets
+        // varies from frame to frame, and its buffer must not creep up.
+        let longest = (0..n).map(|i| candidates.of(i).len()).max().unwrap_or(0);
+        self.workers.iter_mut().for_each(|w| w.obstacles.reserve(longest.saturating_sub(w.obstacles.len())));
         self.moved.clear();
         self.moved.resize(n, false);
         self.adjusted.clear();
@@ -306,7 +310,12 @@ impl Adjuster {
             levels = levels.max(below + 1);
         }
         let levels = levels as usize;
+        // Level lists sized for the worst case (one feather per level, or
+        // all in one) from the start, so that sparse frames never grow them.
         self.level_start.clear();
+        self.level_start.reserve(n + 1);
+        self.cursor.reserve(n.saturating_sub(self.cursor.len()));
+        self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
         self.level_start.resize(levels + 1, 0);
         for &i in order {
             let l = self.level[i as usize] as usize;

@@ -1,37 +1,52 @@
 //! One animation frame, incremental (paper §3.3) or legacy (the 2015
 //! method), applied to a coat in place (DESIGN.md §5):
 //! 1. re-pose every root from the deformed mesh; feathers keep their pitch
-//!    and roll relative to their own frame;
-//! 2. `R_k`: roots whose face's affine map `A_i^k` differs from a
-//!    neighbour's;
-//! 3. (incremental) neighbourhoods at the current pose, `ΔP` recomputed for
-//!    the pairs of `R_k`, sign changes turned into edge reversals in the
-//!    dynamic order with the cycle rule;
-//! 4. `R*_k` = `R_k` plus the roots that became prior or gained a prior or
-//!    moved in the order; they are readjusted in order (all three steps; the
-//!    legacy mode runs fine pitch only), and a feather whose pitch or roll
-//!    moved by more than θs pulls in the feathers that lie on it.
+//!    and roll relative to their own frame (incremental: neighbourhoods and
+//!    obstacle candidates follow the current pose);
+//! 2. `R_k`: feathers whose surroundings moved relative to them, summed
+//!    since they were last adjusted ([`super::motion::Staleness`]), by more
+//!    than `θs·L` (a feather's tip moves that far when its pitch changes by
+//!    θs, the change the propagation rule already lets pass). The
+//!    surroundings are the k nearest roots (their priorities) and the
+//!    earlier candidates whose feathers lie over the feather's footprint
+//!    (its obstacles). A rigid motion moves nothing relative to anything;
+//! 3. (incremental) `ΔP` recomputed for the pairs of `R_k`, sign changes
+//!    turned into edge reversals in the dynamic order with the cycle rule;
+//! 4. `R*_k` = `R_k` plus the feathers whose obstacles changed with the
+//!    order or the neighbourhoods: a candidate lying over the footprint
+//!    became earlier or stopped being earlier. They are readjusted in order
+//!    (all three steps; the legacy mode runs fine pitch only), and a feather
+//!    whose pitch or roll moved by more than θs pulls in the feathers that
+//!    lie on it ([`Contacts`]).
 
-use super::affine::{DeformationTolerance, FaceMap, deform_differently, face_maps};
+use super::contact::Contacts;
+use super::motion::{RootMap, root_maps};
 use crate::Mode;
-use crate::adjustment::{AdjustSteps, CandidateLists, Selection};
+use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
+use crate::body::BodyIndex;
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::error::Result;
-use crate::ordering::Priorities;
+use crate::feather::FeatherPose;
+use crate::geometry::RootFrame;
+use crate::ordering::{Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
 use crate::stats::FrameReport;
-use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
 /// Buffers of the frame update, reused every frame.
 #[derive(Debug, Default)]
 pub struct StepWorkspace {
-    previous_positions: Vec<Vec3>,
-    previous_root_positions: Vec<Vec3>,
-    maps: Vec<FaceMap>,
+    previous_frames: Vec<RootFrame>,
+    previous_ranks: Vec<u32>,
+    previous_offsets: Vec<u32>,
+    previous_indices: Vec<u32>,
+    maps: Vec<RootMap>,
+    displacement: Vec<f32>,
     seeds: Vec<bool>,
     r_k: Vec<u32>,
+    contacts: Contacts,
+    adjusted: Vec<bool>,
 }
 
 /// Advances `coat` to `positions` (welded) by the incremental or legacy
@@ -39,32 +54,41 @@ pub struct StepWorkspace {
 pub fn step_coat(
     coat: &mut Coat,
     dressing: &Dressing,
-    positions: &[Vec3],
+    positions: &[glam::Vec3],
     work: &mut Workspace,
     step: &mut StepWorkspace,
     progress: &Progress,
 ) -> Result<()> {
     let start = Instant::now();
     let n = dressing.len();
+    let incremental = dressing.mode == Mode::Incremental;
     // 1. Re-pose; remember where everything was.
-    step.previous_positions.clear();
-    step.previous_positions.extend_from_slice(&coat.positions);
-    step.previous_root_positions.clear();
-    step.previous_root_positions.extend(coat.frames.iter().map(|f| f.position));
+    remember(coat, step);
     coat.pose(dressing, positions);
+    if coat.staleness.len() != n {
+        coat.staleness.reset(n);
+    }
     progress.check(Phase::Ordering, 0.0)?;
-
-    // 2. R_k from the per-face affine maps.
-    face_maps(&step.previous_positions, &coat.positions, &dressing.triangles, &mut step.maps);
-    roots_deforming_differently(coat, dressing, step);
+    if incremental && dressing.recompute_neighbourhoods {
+        coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
+    }
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices);
     progress.check(Phase::Ordering, 0.3)?;
+
+    // 2. R_k from the relative motion of the roots since the last frame.
+    root_maps(&step.previous_frames, &coat.frames, &mut step.maps);
+    surroundings_displacement(coat, dressing, step);
+    step.seeds.clear();
+    step.seeds.resize(n, false);
+    let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
+    coat.staleness.add(&step.displacement, limit, &mut step.seeds);
+    step.r_k.clear();
+    step.r_k.extend((0..n as u32).filter(|&i| step.seeds[i as usize]));
 
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, ..FrameReport::default() };
-    if dressing.mode == Mode::Incremental {
-        if dressing.recompute_neighbourhoods {
-            coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
-        }
+    if incremental {
         let priorities = Priorities::improved(&coat.frames, dressing.gamma, dressing.lambda);
         let pairs = dressing.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
         let stats = coat.order.update_frame(pairs, &step.r_k, &priorities);
@@ -72,12 +96,8 @@ pub fn step_coat(
         report.reversals = stats.reversals_done;
         report.reversals_refused = stats.reversals_refused;
         report.cycles_broken = stats.cycles_broken;
-        // R*_k: add every root whose obstacles may have changed.
-        for list in [coat.order.became_prior(), coat.order.gained_prior(), coat.order.moved()] {
-            for &i in list {
-                step.seeds[i as usize] = true;
-            }
-        }
+        // R*_k: add every feather whose obstacles changed.
+        obstacles_changed(coat, step);
     }
     report.deformed = step.r_k.len();
     report.seeds = step.seeds.iter().filter(|s| **s).count();
@@ -87,27 +107,53 @@ pub fn step_coat(
     // 4. Readjust R*_k in order, propagating past θs.
     coat.body.rebuild(&coat.positions, &dressing.triangles);
     let steps = if dressing.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let stats = if n == 0 {
-        Some(Default::default())
+        AdjustStats::default()
     } else {
-        work.adjuster.adjust_in_order_until(
+        let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+        let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
+        let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
+        let stats =
+            pass.run(&mut work.adjuster, &mut coat.poses, CandidateLists::new(rows.0, rows.1), &step.seeds, &|done| {
+                progress.check(Phase::Adjusting, done).is_ok()
+            });
+        // A stopped adjustment (None) has set the progress's stop flag.
+        progress.check(Phase::Adjusting, 1.0)?;
+        let mut stats = stats.unwrap_or_default();
+        let missed = step.contacts.missed(
             &coat.frames,
             &dressing.shapes,
-            &mut coat.poses,
-            coat.order.order(),
+            &coat.poses,
+            offsets,
+            indices,
             coat.order.ranks(),
-            CandidateLists::new(offsets, indices),
-            &coat.body,
-            &dressing.adjust_params,
-            steps,
-            Selection::Propagate { seeds: &step.seeds, threshold: dressing.theta_s },
-            &|done| progress.check(Phase::Adjusting, done).is_ok(),
-        )
+            work.adjuster.adjusted(),
+        );
+        if missed > 0 {
+            // Feathers an earlier one now lies on unlisted: readjust them
+            // (and, past θs, what lies on them) with their full lists.
+            step.adjusted.clear();
+            step.adjusted.extend_from_slice(work.adjuster.adjusted());
+            let seeds = step.contacts.missed_flags();
+            let more =
+                pass.run(&mut work.adjuster, &mut coat.poses, CandidateLists::new(offsets, indices), seeds, &|_| {
+                    progress.check(Phase::Adjusting, 1.0).is_ok()
+                });
+            progress.check(Phase::Adjusting, 1.0)?;
+            let more = more.unwrap_or_default();
+            for (a, &b) in step.adjusted.iter_mut().zip(work.adjuster.adjusted()) {
+                *a |= b;
+            }
+            work.adjuster.set_adjusted(&step.adjusted);
+            stats.adjusted = step.adjusted.iter().filter(|a| **a).count();
+            stats.collision_tests += more.collision_tests;
+            // A feather adjusted in both passes may be counted clamped twice.
+            stats.clamped = (stats.clamped + more.clamped).min(stats.adjusted);
+            stats.seconds += more.seconds;
+        }
+        stats
     };
-    // A stopped adjustment (None) has set the progress's stop flag.
-    progress.check(Phase::Adjusting, 1.0)?;
-    let stats = stats.unwrap_or_default();
+    coat.staleness.clear_adjusted(work.adjuster.adjusted());
     report.adjusted = stats.adjusted;
     report.collision_tests = stats.collision_tests;
     report.clamped = stats.clamped;
@@ -118,23 +164,137 @@ pub fn step_coat(
     Ok(())
 }
 
-/// Marks `R_k` (paper §3.3): root i is in it when some neighbour j ∈ N_i
-/// deforms differently, i.e. the map of i's face does not carry j along.
-fn roots_deforming_differently(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace) {
-    let n = dressing.len();
-    let tol = DeformationTolerance::default();
-    let maps = &step.maps;
-    let previous = &step.previous_root_positions;
-    step.seeds.clear();
-    step.seeds.resize(n, false);
-    step.seeds.par_iter_mut().enumerate().with_min_len(256).for_each(|(i, seed)| {
-        let map_i = &maps[dressing.roots[i].point.face as usize];
-        *seed = coat.neighbourhoods.neighbours_of(i as u32).iter().any(|&j| {
+/// What every ordered adjustment of a frame shares.
+struct Pass<'a> {
+    dressing: &'a Dressing,
+    steps: AdjustSteps,
+    frames: &'a [RootFrame],
+    order: &'a PriorityOrder,
+    body: &'a BodyIndex,
+}
+
+impl Pass<'_> {
+    /// Adjusts `seeds` in order, and past θs what lies on them, with
+    /// `candidates` as obstacle lists.
+    fn run(
+        &self,
+        adjuster: &mut Adjuster,
+        poses: &mut [FeatherPose],
+        candidates: CandidateLists<'_>,
+        seeds: &[bool],
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let d = self.dressing;
+        adjuster.adjust_in_order_until(
+            self.frames,
+            &d.shapes,
+            poses,
+            self.order.order(),
+            self.order.ranks(),
+            candidates,
+            self.body,
+            &d.adjust_params,
+            self.steps,
+            Selection::Propagate { seeds, threshold: d.theta_s },
+            keep_going,
+        )
+    }
+}
+
+/// Keeps the root frames, ranks and obstacle candidates of the frame being left.
+fn remember(coat: &Coat, step: &mut StepWorkspace) {
+    step.previous_frames.clear();
+    step.previous_frames.extend_from_slice(&coat.frames);
+    step.previous_ranks.clear();
+    step.previous_ranks.extend_from_slice(coat.order.ranks());
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    step.previous_offsets.clear();
+    step.previous_offsets.extend_from_slice(offsets);
+    step.previous_indices.clear();
+    step.previous_indices.extend_from_slice(indices);
+}
+
+/// For each feather, how far its surroundings moved relative to it since
+/// the last frame: over its k nearest roots j, the displacement at the
+/// distance between the roots (what their priority difference sees); over
+/// its earlier candidates lying over its footprint, the displacement at
+/// their length (what its height field sees).
+fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace) {
+    let (maps, frames, ranks, contacts) = (&step.maps, &coat.frames, &step.previous_ranks, &step.contacts);
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let nb = &coat.neighbourhoods;
+    step.displacement.resize(dressing.len(), 0.0);
+    step.displacement.par_iter_mut().enumerate().with_min_len(128).for_each(|(i, out)| {
+        let here = &maps[i];
+        let mut worst = 0.0f32;
+        for &j in nb.neighbours_of(i as u32) {
             let j = j as usize;
-            let map_j = &maps[dressing.roots[j].point.face as usize];
-            deform_differently(map_i, map_j, previous[j], coat.frames[j].position, dressing.roots[i].spacing, &tol)
+            worst = worst.max(here.relative(&maps[j]).at(frames[i].position.distance(frames[j].position)));
+        }
+        let row = offsets[i] as usize..offsets[i + 1] as usize;
+        for (e, &j) in row.clone().zip(&indices[row]) {
+            let j = j as usize;
+            if contacts.touching(e) & (ranks[j] < ranks[i]) {
+                worst = worst.max(here.relative(&maps[j]).at(dressing.shapes[j].length));
+            }
+        }
+        *out = worst;
+    });
+}
+
+/// Adds to the seeds every feather whose obstacles changed with the order
+/// or the candidate lists: a candidate lying over its footprint that was
+/// earlier and no longer is, or the other way round.
+fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace) {
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let (old_offsets, old_indices) = (&step.previous_offsets, &step.previous_indices);
+    let (old_rank, rank) = (&step.previous_ranks, coat.order.ranks());
+    let (contacts, frames) = (&step.contacts, &coat.frames);
+    let n = step.seeds.len();
+    let same_rows = old_offsets.len() == n + 1;
+    step.seeds.par_iter_mut().enumerate().with_min_len(128).filter(|(_, s)| !**s).for_each(|(i, seed)| {
+        let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
+        let old_row = if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
+        let footprint = contacts.footprint(i);
+        *seed = status_changes(old_row, new_row, |j, in_old, in_new| {
+            let was = in_old && old_rank[j] < old_rank[i];
+            let is = in_new && rank[j] < rank[i];
+            was != is && footprint.reached_by(&frames[i], contacts.sphere(j))
         });
     });
-    step.r_k.clear();
-    step.r_k.extend(step.seeds.iter().enumerate().filter(|(_, s)| **s).map(|(i, _)| i as u32));
+}
+
+/// Walks the union of two sorted rows; true as soon as `changed(j, in
+/// old, in new)` is.
+fn status_changes(old: &[u32], new: &[u32], mut changed: impl FnMut(usize, bool, bool) -> bool) -> bool {
+    let (mut a, mut b) = (0, 0);
+    while a < old.len() || b < new.len() {
+        let (x, y) = (old.get(a).copied().unwrap_or(u32::MAX), new.get(b).copied().unwrap_or(u32::MAX));
+        let j = x.min(y);
+        let (in_old, in_new) = (x == j && a < old.len(), y == j && b < new.len());
+        a += usize::from(in_old);
+        b += usize::from(in_new);
+        if changed(j as usize, in_old, in_new) {
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn status_changes_walks_the_union_of_two_rows() {
+        let mut seen = Vec::new();
+        let changed = status_changes(&[1, 3, 5], &[2, 3, 6], |j, a, b| {
+            seen.push((j, a, b));
+            false
+        });
+        assert!(!changed);
+        assert_eq!(seen, [(1, true, false), (2, false, true), (3, true, true), (5, true, false), (6, false, true)]);
+        assert!(status_changes(&[], &[4], |j, _, b| j == 4 && b));
+        assert!(!status_changes(&[], &[], |_, _, _| true));
+    }
 }

@@ -65,7 +65,9 @@ pub struct PlumageConfig {
     pub fluffiness: f32,
     /// Allowed penetration into obstacles, as a fraction of thickness (default 0).
     pub collision_allowance: f32,
-    /// Propagation threshold θs, radians (default 0.05).
+    /// Propagation threshold θs, radians (default 0.05); a feather is also
+    /// readjusted once what surrounds it moved, relative to it, by θs times
+    /// its length.
     pub theta_s: f32,
     /// Flow axis for the orientation field when the mesh gives no hints.
     pub flow_axis: [f32; 3],
@@ -479,11 +481,13 @@ pub struct PlumageFrameStats {
     pub adjust_seconds: f64,
     /// Seconds of the whole call.
     pub step_seconds: f64,
-    /// Roots whose face deformed differently from a neighbour's since the
-    /// previous frame (the paper's R_k); 0 after create and evaluate.
+    /// Feathers whose surroundings moved relative to them, since they were
+    /// last adjusted, by more than θs times their length (the paper's R_k);
+    /// 0 after create and evaluate.
     pub deformed: u64,
-    /// Roots readjusted in any case (R*_k: R_k plus the roots the
-    /// reordering touched); `adjusted` minus this came by propagation.
+    /// Feathers readjusted in any case (R*_k: R_k plus those whose
+    /// obstacles the reordering changed); `adjusted` minus this came by
+    /// propagation.
     pub seeds: u64,
 }
 

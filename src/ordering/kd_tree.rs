@@ -155,14 +155,14 @@ fn widest_axis(items: &[Item]) -> usize {
 /// Whether `(d2, id)` would enter the sorted list `best` of at most `k`
 /// entries, ordered by (distance, id).
 #[inline]
-fn ranks_among_best(best: &[(f32, u32)], k: usize, d2: f32, id: u32) -> bool {
+pub(super) fn ranks_among_best(best: &[(f32, u32)], k: usize, d2: f32, id: u32) -> bool {
     best.len() < k || precedes((d2, id), best[best.len() - 1])
 }
 
 /// Inserts `(d2, id)` (which ranks) into `best`, dropping the worst entry
 /// when the list is full.
 #[inline]
-fn insert_candidate(best: &mut Vec<(f32, u32)>, k: usize, d2: f32, id: u32) {
+pub(super) fn insert_candidate(best: &mut Vec<(f32, u32)>, k: usize, d2: f32, id: u32) {
     if best.len() == k {
         best.pop();
     }

@@ -15,7 +15,7 @@
 //! reaching round the rim of a wing can meet one from the other skin, and
 //! the adjustment checks those exactly.
 
-use super::kd_tree::KdTree;
+use super::kd_tree::{KdTree, insert_candidate, ranks_among_best};
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
 use crate::snapshot::{Reader, Writer};
@@ -72,9 +72,9 @@ impl Neighbourhoods {
         assert!(u32::try_from(frames.len()).is_ok(), "too many roots for u32 indices");
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
         self.tree.rebuild(frames.iter().map(|f| f.position));
-        self.rebuild_nearest(frames, params);
-        self.rebuild_pairs(frames.len());
         self.rebuild_obstacles(frames, reach);
+        self.rebuild_nearest(frames, reach, params);
+        self.rebuild_pairs(frames.len());
     }
 
     /// Number of roots of the last rebuild.
@@ -115,13 +115,38 @@ impl Neighbourhoods {
         (&self.obstacle_offsets, &self.obstacle_indices)
     }
 
-    fn rebuild_nearest(&mut self, frames: &[RootFrame], params: &NeighbourParams) {
+    /// The k nearest roots of every root, by distance then index. Every
+    /// root within `reach_i + min reach` of root i whose normal agrees is an
+    /// obstacle candidate of i, so when i's k-th nearest candidate lies that
+    /// close its candidates hold its k nearest roots; only the other roots
+    /// (none on a closed coat) query the tree. Both ways rank candidates by
+    /// the same `(|r_j − r_i|², j)`, so the rows are those of the tree alone.
+    fn rebuild_nearest(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+        let k = params.k;
+        let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
         self.knn_offsets.clear();
         self.knn_indices.clear();
         self.knn_offsets.push(0);
         for (i, frame) in frames.iter().enumerate() {
-            let accept = |j: u32| j as usize != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
-            self.tree.nearest(frame.position, params.k, &accept, &mut self.best);
+            self.best.clear();
+            if k > 0 {
+                for &j in row(&self.obstacle_offsets, &self.obstacle_indices, i as u32) {
+                    if !normals_agree(frame, &frames[j as usize], params.min_normal_dot) {
+                        continue;
+                    }
+                    let d2 = (frames[j as usize].position - frame.position).length_squared();
+                    if ranks_among_best(&self.best, k, d2, j) {
+                        insert_candidate(&mut self.best, k, d2, j);
+                    }
+                }
+            }
+            let sure = reach.get(i).map_or(0.0, |&r| sanitized_reach(r) + min_reach);
+            let beyond = |d2: f32| d2.partial_cmp(&(sure * sure)).is_none_or(|o| o.is_gt());
+            if self.best.len() < k || self.best.last().is_some_and(|b| beyond(b.0)) {
+                let accept =
+                    |j: u32| j as usize != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+                self.tree.nearest(frame.position, k, &accept, &mut self.best);
+            }
             self.knn_indices.extend(self.best.iter().map(|&(_, j)| j));
             self.knn_offsets.push(self.knn_indices.len() as u32);
         }

@@ -1,0 +1,355 @@
+//! Which obstacle candidates a feather can actually rest on this frame.
+//!
+//! The obstacle candidates of feather i are every root within reach
+//! (`|r_i − r_j| ≤ L_i + L_j`, about a hundred on a closed coat), but only
+//! the few whose feathers lie over i's height-field footprint matter: the
+//! adjustment rasterises an obstacle only when its triangles' box meets the
+//! footprint's rectangle `[0, L + dx] × [−(W/2 + dy), W/2 + dy]` in i's
+//! frame (any height). Feather j lies within a sphere (centre, radius)
+//! around its current triangles; when the sphere's shadow on i's tangent
+//! plane misses a slightly larger rectangle, j's triangles cannot touch the
+//! footprint.
+//!
+//! A frame passes the adjustment only the candidates that touch or come
+//! within a pose margin of touching ([`Contacts::obstacle_rows`]): the
+//! margin covers a pitch or roll change of up to [`POSE_MARGIN`] radians of
+//! the candidate during the frame. That list serves the adjustment both as
+//! obstacles and for propagation (a feather that moved past θs pulls in the
+//! feathers it lies on, not every feather within reach). A candidate that
+//! was readjusted by more than the margin may end up over a footprint it
+//! was not listed for; [`Contacts::missed`] finds those afterwards so that
+//! the frame can readjust the feathers concerned with their full lists.
+
+use crate::adjustment::AdjustParams;
+use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
+use crate::geometry::RootFrame;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Pitch or roll change (radians) of a candidate during a frame that its
+/// listing covers in advance.
+const POSE_MARGIN: f32 = 0.2;
+/// Relative slack of the footprint rectangle over the height field's.
+const FOOTPRINT_SLACK: f32 = 0.1;
+/// Candidate entries per parallel work item.
+const ENTRY_CHUNK: usize = 4096;
+
+/// A conservative rectangle around a feather's height-field footprint, in
+/// its frame (x along the shaft, y across).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Footprint {
+    x_lo: f32,
+    x_hi: f32,
+    y_half: f32,
+}
+
+impl Footprint {
+    /// The rectangle of a feather of `shape` at the resolution of `params`:
+    /// the field's `[0, L + dx] × ±(W/2 + dy)` grown by a tenth of the
+    /// length and width on every side.
+    pub fn of(shape: &FeatherShape, params: &AdjustParams) -> Self {
+        let (l, w) = (shape.length.max(0.0), shape.width.max(0.0));
+        let dx = l / (params.height_field_u.max(2) - 1) as f32;
+        let dy = if params.height_field_v > 2 { w / (params.height_field_v - 2) as f32 } else { f32::INFINITY };
+        Self {
+            x_lo: -FOOTPRINT_SLACK * l,
+            x_hi: l + dx + FOOTPRINT_SLACK * l,
+            y_half: 0.5 * w + dy + FOOTPRINT_SLACK * w,
+        }
+    }
+
+    /// Squared distance, in `frame`'s tangent plane, from the shadow of
+    /// `point` to the rectangle (0 inside).
+    #[inline]
+    pub fn distance2(&self, frame: &RootFrame, point: Vec3) -> f32 {
+        Shadow::of(self, frame).distance2(point)
+    }
+
+    /// Whether a sphere may reach over the rectangle.
+    #[inline]
+    pub fn reached_by(&self, frame: &RootFrame, sphere: Sphere) -> bool {
+        self.distance2(frame, sphere.centre) <= sphere.radius * sphere.radius
+    }
+}
+
+/// A footprint rectangle placed in world space at a frame: the tangent
+/// and binormal of the frame with the rectangle's centre and half sizes
+/// folded in, so that a point's distance to it costs two dot products.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Shadow {
+    tangent: Vec3,
+    binormal: Vec3,
+    x_centre: f32,
+    y_centre: f32,
+    x_half: f32,
+    y_half: f32,
+}
+
+impl Shadow {
+    fn of(footprint: &Footprint, frame: &RootFrame) -> Self {
+        let x_mid = 0.5 * (footprint.x_lo + footprint.x_hi);
+        Self {
+            tangent: frame.tangent,
+            binormal: frame.binormal,
+            x_centre: frame.tangent.dot(frame.position) + x_mid,
+            y_centre: frame.binormal.dot(frame.position),
+            x_half: 0.5 * (footprint.x_hi - footprint.x_lo),
+            y_half: footprint.y_half,
+        }
+    }
+
+    /// As [`Footprint::distance2`].
+    #[inline]
+    fn distance2(&self, point: Vec3) -> f32 {
+        let dx = ((self.tangent.dot(point) - self.x_centre).abs() - self.x_half).max(0.0);
+        let dy = ((self.binormal.dot(point) - self.y_centre).abs() - self.y_half).max(0.0);
+        dx * dx + dy * dy
+    }
+}
+
+/// A feather's sphere centre and squared radii without and with the pose
+/// margin, packed for the candidate loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Reach2 {
+    centre: Vec3,
+    touch: f32,
+    near: f32,
+}
+
+/// A sphere around a feather's triangles.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sphere {
+    /// Midpoint of the shaft.
+    pub centre: Vec3,
+    /// Distance to the farthest corner.
+    pub radius: f32,
+}
+
+impl Sphere {
+    /// The sphere of the feather at `pose`.
+    pub fn of(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let t = feather_triangles(frame, shape, pose);
+        let centre = (t[0][0] + t[0][1]) * 0.5;
+        let radius = t.iter().flatten().map(|p| p.distance(centre)).fold(0.0f32, f32::max);
+        Self { centre, radius }
+    }
+
+    /// The sphere grown to cover a pitch or roll change of [`POSE_MARGIN`]:
+    /// no point of the feather is farther than `L + W/2` from its root.
+    fn with_pose_margin(self, shape: &FeatherShape) -> Self {
+        Self { centre: self.centre, radius: self.radius + POSE_MARGIN * (shape.length + 0.5 * shape.width) }
+    }
+}
+
+/// Per-frame contact data over the obstacle candidates (CSR rows, one entry
+/// per candidate pair `(i, j)`). Scratch of the frame update.
+#[derive(Clone, Debug, Default)]
+pub struct Contacts {
+    footprints: Vec<Footprint>,
+    shadows: Vec<Shadow>,
+    spheres: Vec<Sphere>,
+    reach2: Vec<Reach2>,
+    owner: Vec<u32>,
+    touch: Vec<u8>,
+    offsets: Vec<u32>,
+    indices: Vec<u32>,
+    missed: Vec<bool>,
+}
+
+/// `touch` values of an entry `(i, j)`: j's sphere misses i's footprint
+/// even with the pose margin (0), reaches it only with the margin (1), or
+/// reaches it (2).
+const APART: u8 = 0;
+const TOUCHING: u8 = 2;
+
+impl Contacts {
+    /// Every feather's footprint and sphere at its current pose, and for
+    /// every candidate entry `(i, j)` whether j's sphere reaches i's
+    /// footprint, with or without the pose margin.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &[FeatherPose],
+        params: &AdjustParams,
+        offsets: &[u32],
+        indices: &[u32],
+    ) {
+        let n = frames.len();
+        if self.footprints.len() != n {
+            self.footprints.clear();
+            self.footprints.extend(shapes.iter().map(|s| Footprint::of(s, params)));
+        }
+        self.spheres.resize(n, Sphere::default());
+        self.reach2.resize(n, Reach2::default());
+        self.shadows.resize(n, Shadow::default());
+        let footprints = &self.footprints;
+        self.spheres
+            .par_iter_mut()
+            .zip(self.reach2.par_iter_mut().zip(self.shadows.par_iter_mut()))
+            .enumerate()
+            .with_min_len(256)
+            .for_each(|(i, (s, (r2, shadow)))| {
+                *s = Sphere::of(&frames[i], &shapes[i], poses[i]);
+                let grown = s.with_pose_margin(&shapes[i]).radius;
+                *r2 = Reach2 { centre: s.centre, touch: s.radius * s.radius, near: grown * grown };
+                *shadow = Shadow::of(&footprints[i], &frames[i]);
+            });
+        self.owner.clear();
+        for i in 0..n {
+            let len = (offsets[i + 1] - offsets[i]) as usize;
+            self.owner.extend(std::iter::repeat_n(i as u32, len));
+        }
+        let (shadows, reach2, owner) = (&self.shadows, &self.reach2, &self.owner);
+        self.touch.resize(indices.len(), APART);
+        self.touch.par_chunks_mut(ENTRY_CHUNK).enumerate().for_each(|(chunk, out)| {
+            let base = chunk * ENTRY_CHUNK;
+            let entries = owner[base..base + out.len()].iter().zip(&indices[base..base + out.len()]);
+            for (t, (&i, &j)) in out.iter_mut().zip(entries) {
+                let r = &reach2[j as usize];
+                let d2 = shadows[i as usize].distance2(r.centre);
+                *t = u8::from(d2 <= r.touch) + u8::from(d2 <= r.near);
+            }
+        });
+    }
+
+    /// Feather `i`'s footprint.
+    pub fn footprint(&self, i: usize) -> &Footprint {
+        &self.footprints[i]
+    }
+
+    /// Feather `j`'s sphere at the pose it had when [`update`](Self::update) ran.
+    pub fn sphere(&self, j: usize) -> Sphere {
+        self.spheres[j]
+    }
+
+    /// Whether candidate entry `e` (j in row i) touches i's footprint.
+    #[inline]
+    pub fn touching(&self, e: usize) -> bool {
+        self.touch[e] == TOUCHING
+    }
+
+    /// Fills the rows handed to the adjustment: the candidates of each
+    /// feather that come earlier in the order (`rank`) and touch its
+    /// footprint or come within the pose margin of it.
+    pub fn obstacle_rows(&mut self, offsets: &[u32], indices: &[u32], rank: &[u32]) -> (&[u32], &[u32]) {
+        self.offsets.clear();
+        self.offsets.push(0);
+        // Written without branching on the (unpredictable) tests; sized for
+        // every candidate, so the buffer never creeps up with the poses.
+        self.indices.resize(indices.len(), 0);
+        let mut len = 0;
+        for i in 0..offsets.len().saturating_sub(1) {
+            let rank_i = rank[i];
+            let row = offsets[i] as usize..offsets[i + 1] as usize;
+            for (&j, &touch) in indices[row.clone()].iter().zip(&self.touch[row]) {
+                self.indices[len] = j;
+                len += usize::from((touch != APART) & (rank[j as usize] < rank_i));
+            }
+            self.offsets.push(len as u32);
+        }
+        (&self.offsets, &self.indices[..len])
+    }
+
+    /// After an adjustment with [`obstacle_rows`](Self::obstacle_rows):
+    /// marks the feathers i over whose footprint an earlier, readjusted
+    /// candidate j now lies although the rows did not list j for i. Only a
+    /// feather that left its sphere grown by the pose margin can do that
+    /// (it turned by more than the margin). Returns how many were marked;
+    /// [`missed_flags`](Self::missed_flags) holds them.
+    #[allow(clippy::too_many_arguments)]
+    pub fn missed(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &[FeatherPose],
+        offsets: &[u32],
+        indices: &[u32],
+        rank: &[u32],
+        adjusted: &[bool],
+    ) -> usize {
+        let n = frames.len();
+        self.missed.clear();
+        self.missed.resize(n, false);
+        let mut count = 0;
+        for j in (0..n).filter(|&j| adjusted[j]) {
+            let now = Sphere::of(&frames[j], &shapes[j], poses[j]);
+            let before = self.spheres[j].with_pose_margin(&shapes[j]);
+            if now.centre.distance(before.centre) + now.radius <= before.radius {
+                continue;
+            }
+            // The relation is symmetric: i is a candidate of j exactly when
+            // j is one of i, so the entries (i, j) are found from row j.
+            for &i in &indices[offsets[j] as usize..offsets[j + 1] as usize] {
+                let i = i as usize;
+                if rank[i] <= rank[j] || self.missed[i] {
+                    continue;
+                }
+                let row = offsets[i] as usize..offsets[i + 1] as usize;
+                let listed =
+                    indices[row.clone()].binary_search(&(j as u32)).is_ok_and(|k| self.touch[row.start + k] != APART);
+                if !listed && self.footprints[i].reached_by(&frames[i], now) {
+                    self.missed[i] = true;
+                    count += 1;
+                }
+            }
+        }
+        count
+    }
+
+    /// The flags of the last [`missed`](Self::missed).
+    pub fn missed_flags(&self) -> &[bool] {
+        &self.missed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::adjustment::HeightField;
+    use crate::rng::Rng;
+
+    /// Whatever the resolution, an obstacle whose sphere misses the
+    /// footprint rectangle touches no cell of the adjustment's height field.
+    #[test]
+    fn a_sphere_off_the_footprint_leaves_the_height_field_alone() {
+        let mut rng = Rng::new(3);
+        let frame = RootFrame::from_normal_and_direction(Vec3::new(0.5, -0.2, 0.1), Vec3::Z, Vec3::X).unwrap();
+        for (u, v) in [(32, 16), (2, 3), (8, 40), (64, 4)] {
+            let params = AdjustParams { height_field_u: u, height_field_v: v, ..AdjustParams::default() };
+            let shape = FeatherShape::for_spacing(1.0);
+            let footprint = Footprint::of(&shape, &params);
+            let mut field = HeightField::new(u, v);
+            let mut checked = 0;
+            for _ in 0..4000 {
+                let at =
+                    Vec3::new(rng.next_f32() * 16.0 - 6.0, rng.next_f32() * 12.0 - 6.0, rng.next_f32() * 4.0 - 2.0);
+                let normal = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 1.0);
+                let direction = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
+                let Some(other) = RootFrame::from_normal_and_direction(at, normal, direction) else { continue };
+                let pose = FeatherPose::new(rng.next_f32() * 1.4 - 0.3, rng.next_f32() * 1.2 - 0.6);
+                let sphere = Sphere::of(&other, &shape, pose);
+                if footprint.reached_by(&frame, sphere) {
+                    continue;
+                }
+                field.reset(&shape, params.min_pitch);
+                let touched = field.add_obstacle(&frame, &feather_triangles(&other, &shape, pose), shape.thickness);
+                assert!(!touched, "an obstacle off the footprint touched the field at {u}×{v}");
+                checked += 1;
+            }
+            assert!(checked > 1000);
+        }
+    }
+
+    #[test]
+    fn the_pose_margin_covers_a_turn_of_the_candidate() {
+        let shape = FeatherShape::for_spacing(1.0);
+        let frame = RootFrame::from_normal_and_direction(Vec3::new(0.3, 0.4, 0.0), Vec3::Z, Vec3::X).unwrap();
+        let grown = Sphere::of(&frame, &shape, FeatherPose::new(0.1, 0.0)).with_pose_margin(&shape);
+        for (pitch, roll) in [(0.3, 0.0), (-0.1, 0.2), (0.28, -0.2)] {
+            let turned = feather_triangles(&frame, &shape, FeatherPose::new(pitch, roll));
+            assert!(turned.iter().flatten().all(|p| p.distance(grown.centre) <= grown.radius + 1e-5));
+        }
+    }
+}
