@@ -309,6 +309,13 @@ typedef struct PlumageConfig {
    * Where the derived flow starts (e.g. the beak tip), in model units.
    */
   float flow_source[3];
+  /**
+   * Incremental mode: how far a feather may drift (radians, default 0.3)
+   * before it is readjusted, when every moved feather is checked exactly
+   * each frame and readjusted at once if it intersects; at or below
+   * `theta_s`, the paper's rule (readjust at θs, no exact checks).
+   */
+  float drift_tolerance;
 } PlumageConfig;
 
 /**
@@ -553,11 +560,17 @@ typedef struct PlumageFrameStats {
    */
   uint64_t deformed;
   /**
-   * Feathers readjusted in any case (R*_k: R_k plus those whose
-   * obstacles the reordering changed); `adjusted` minus this came by
-   * propagation.
+   * Feathers readjusted in any case: surroundings moved by more than the
+   * drift tolerance (θs in the paper's rule) times their length, or
+   * obstacles changed by the reordering; `adjusted` minus this came by
+   * propagation or failed the exact check.
    */
   uint64_t seeds;
+  /**
+   * Feathers whose surroundings moved that were checked exactly and kept
+   * their pose (incremental mode with `drift_tolerance` above `theta_s`).
+   */
+  uint64_t verified;
 } PlumageFrameStats;
 
 /**

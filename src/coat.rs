@@ -49,6 +49,8 @@ pub struct Dressing {
     pub lambda: f32,
     /// θs, the propagation threshold.
     pub theta_s: f32,
+    /// The incremental mode's drift tolerance (`Config::drift_tolerance`).
+    pub drift_tolerance: f32,
     /// Recompute neighbourhoods at the current pose every frame.
     pub recompute_neighbourhoods: bool,
 }
@@ -208,6 +210,7 @@ impl Coat {
             adjusted: stats.adjusted,
             deformed: 0,
             seeds: dressing.len(),
+            verified: 0,
             collision_tests: stats.collision_tests,
             priority_changes: 0,
             reversals: 0,
@@ -289,6 +292,7 @@ impl Coat {
             adjusted,
             deformed,
             seeds,
+            verified,
             collision_tests,
             priority_changes,
             reversals,
@@ -300,7 +304,7 @@ impl Coat {
             step_seconds,
         } = self.frame_report;
         w.u64(frame_index);
-        [adjusted, deformed, seeds].iter().for_each(|&c| w.u64(c as u64));
+        [adjusted, deformed, seeds, verified].iter().for_each(|&c| w.u64(c as u64));
         w.u64(collision_tests);
         [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
         [reorder_seconds, adjust_seconds, step_seconds].iter().for_each(|&s| w.f64(s));
@@ -355,6 +359,7 @@ impl Coat {
             adjusted: count(r)?,
             deformed: count(r)?,
             seeds: count(r)?,
+            verified: count(r)?,
             collision_tests: r.u64()?,
             priority_changes: count(r)?,
             reversals: count(r)?,

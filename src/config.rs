@@ -72,6 +72,18 @@ pub struct Config {
     /// than θs times its length (as far as such a turn moves its tip) is
     /// readjusted.
     pub theta_s: f32,
+    /// Incremental mode only, radians (default 0.3, about 17°). When it is
+    /// above `theta_s`, every feather whose surroundings moved is checked
+    /// each frame with the exact tests of the validation and readjusted at
+    /// once if it intersects anything; otherwise it keeps its pose until
+    /// what surrounds it has moved, relative to it, by this angle times its
+    /// length, and only a readjusted feather that turned by more than this
+    /// angle makes those lying on it readjust. Feathers then never
+    /// intersect because of the motion, far fewer are readjusted each frame,
+    /// and a feather may float above its place by up to about this angle.
+    /// At or below `theta_s` the paper's rule applies (readjust at θs, no
+    /// exact checks).
+    pub drift_tolerance: f32,
     /// Flow axis used to derive the orientation field when the mesh gives no
     /// hints and `flow_source` is unset.
     pub flow_axis: Vec3,
@@ -110,6 +122,7 @@ impl Default for Config {
             fluffiness: 0.0,
             collision_allowance: 0.0,
             theta_s: 0.05,
+            drift_tolerance: 0.3,
             flow_axis: Vec3::X,
             flow_source: None,
             recompute_neighbourhoods: true,
@@ -129,6 +142,7 @@ impl Config {
             ("fluffiness", self.fluffiness),
             ("collision_allowance", self.collision_allowance),
             ("theta_s", self.theta_s),
+            ("drift_tolerance", self.drift_tolerance),
         ];
         for (name, v) in finite_nonneg {
             if !v.is_finite() || v < 0.0 {

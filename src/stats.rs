@@ -44,10 +44,16 @@ pub struct FrameReport {
     /// last adjusted, by more than θs times their length (the paper's `R_k`,
     /// see `animation::step`).
     pub deformed: usize,
-    /// Feathers readjusted in any case (`R*_k`: `R_k` plus those whose
-    /// obstacles the reordering changed); the rest of `adjusted` came by
-    /// propagation past θs.
+    /// Feathers readjusted in any case: those whose surroundings moved by
+    /// more than the drift tolerance times their length (θs in the paper's
+    /// rule, when `R*_k` = `R_k` plus what follows), plus those whose
+    /// obstacles the reordering changed. The rest of `adjusted` came by
+    /// propagation or failed the exact check.
     pub seeds: usize,
+    /// Feathers whose surroundings moved but were only checked exactly
+    /// (they still clear everything) and keep their pose: incremental mode
+    /// with a drift tolerance above θs (see `Config::drift_tolerance`).
+    pub verified: usize,
     /// Obstacle feathers rasterised in this call.
     pub collision_tests: u64,
     /// Pairs whose priority difference changed sign.

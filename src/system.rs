@@ -89,6 +89,7 @@ impl System {
             gamma: config.gamma,
             lambda: config.lambda,
             theta_s: config.theta_s,
+            drift_tolerance: config.drift_tolerance,
             recompute_neighbourhoods: config.recompute_neighbourhoods,
         };
         let sampling_report = SamplingReport {
@@ -374,6 +375,7 @@ impl System {
             fluffiness,
             collision_allowance,
             theta_s,
+            drift_tolerance,
             flow_axis,
             flow_source,
             recompute_neighbourhoods,
@@ -411,6 +413,7 @@ impl System {
                 *fluffiness,
                 *collision_allowance,
                 *theta_s,
+                *drift_tolerance,
                 flow_axis.x,
                 flow_axis.y,
                 flow_axis.z,

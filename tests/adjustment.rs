@@ -5,8 +5,8 @@
 
 use glam::Vec3;
 use plumage::adjustment::{
-    AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection, adjust_feather,
-    adjust_in_order,
+    AdjustParams, AdjustStats, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection,
+    adjust_feather, adjust_in_order,
 };
 use plumage::body::BodyIndex;
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
@@ -578,21 +578,29 @@ fn levels_give_the_serial_result() {
 }
 
 /// Runs an ordered adjustment of `scene` from `poses` with a selection.
+fn readjust_stats(
+    scene: &Scene,
+    adjuster: &mut Adjuster,
+    poses: &mut [FeatherPose],
+    selection: Selection<'_>,
+) -> AdjustStats {
+    adjuster.adjust_in_order(
+        &scene.frames,
+        &scene.shapes,
+        poses,
+        &scene.order,
+        &scene.rank,
+        scene.lists(),
+        &scene.body,
+        &AdjustParams::default(),
+        AdjustSteps::Full,
+        selection,
+    )
+}
+
+/// As [`readjust_stats`], returning the number of feathers adjusted.
 fn readjust(scene: &Scene, adjuster: &mut Adjuster, poses: &mut [FeatherPose], selection: Selection<'_>) -> usize {
-    adjuster
-        .adjust_in_order(
-            &scene.frames,
-            &scene.shapes,
-            poses,
-            &scene.order,
-            &scene.rank,
-            scene.lists(),
-            &scene.body,
-            &AdjustParams::default(),
-            AdjustSteps::Full,
-            selection,
-        )
-        .adjusted
+    readjust_stats(scene, adjuster, poses, selection).adjusted
 }
 
 #[test]
@@ -634,6 +642,46 @@ fn a_subset_readjusts_only_its_feathers_and_propagation_follows_moves() {
     assert_eq!(poses, settled);
     assert!(adjusted >= moved && adjusted < n, "adjusted {adjusted}, moved {moved}, of {n}");
     assert_eq!(adjuster.adjusted().iter().filter(|&&a| a).count(), adjusted);
+}
+
+#[test]
+fn verifying_readjusts_only_feathers_that_intersect() {
+    let scene = plane_scene(1.0, 6.0, 16.0);
+    let (settled, _) = scene.adjust(&AdjustParams::default());
+    let n = scene.frames.len();
+    let mut adjuster = Adjuster::new();
+    let run = |adjuster: &mut Adjuster, poses: &mut [FeatherPose], seeds: &[bool], suspects: &[bool]| {
+        readjust_stats(&scene, adjuster, poses, Selection::Verify { seeds, suspects, threshold: 1.0 })
+    };
+    let none = vec![false; n];
+    let all = vec![true; n];
+
+    // A settled coat passes every check: nothing is readjusted.
+    let mut poses = settled.clone();
+    let stats = run(&mut adjuster, &mut poses, &none, &all);
+    assert_eq!((stats.adjusted, stats.verified), (0, n));
+    assert_eq!(poses, settled);
+    assert!(adjuster.verified().iter().all(|&v| v));
+
+    // Lift the first feather into those lying on it. Below the threshold
+    // propagation does not pass the lift on, but the checks find every
+    // feather it now cuts through, and only those are readjusted.
+    let first = scene.order[0] as usize;
+    let mut poses = settled.clone();
+    poses[first].pitch += 0.3;
+    let lifted_first = poses[first];
+    let disturbed = poses.clone();
+    let stats = run(&mut adjuster, &mut poses, &none, &all);
+    assert_eq!(poses[first], lifted_first, "the first feather has no obstacle and stays lifted");
+    let hit = stats.adjusted;
+    assert!(hit > 0 && hit < n, "{hit} of {n} feathers readjusted");
+    assert_eq!(stats.adjusted + stats.verified, n);
+    assert!(scene.validate(&poses, 64).intersecting_pairs.is_empty(), "the readjusted coat is clean");
+    // Without suspects nothing is checked, so the intersections stay.
+    let mut unchecked = disturbed.clone();
+    let stats = run(&mut adjuster, &mut unchecked, &none, &none);
+    assert_eq!((stats.adjusted, stats.verified), (0, 0));
+    assert!(!scene.validate(&unchecked, 64).intersecting_pairs.is_empty(), "the lift cuts through feathers");
 }
 
 #[test]

@@ -45,6 +45,7 @@ PlumageConfig make_config(const Options& opt) {
         std::copy(opt.flow_source->begin(), opt.flow_source->end(), cfg.flow_source);
     }
     if (opt.mode) cfg.mode = *opt.mode;
+    if (opt.drift_tolerance_deg) cfg.drift_tolerance = static_cast<float>(*opt.drift_tolerance_deg * kPi / 180.0);
     if (opt.threads) cfg.threads = *opt.threads;
     return cfg;
 }

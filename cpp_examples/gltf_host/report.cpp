@@ -86,6 +86,7 @@ json config_to_json(const PlumageConfig& c) {
               {"fluffiness", tidy(c.fluffiness)},
               {"collision_allowance", tidy(c.collision_allowance)},
               {"theta_s", tidy(c.theta_s)},
+              {"drift_tolerance", tidy(c.drift_tolerance)},
               {"flow_axis", {tidy(c.flow_axis[0]), tidy(c.flow_axis[1]), tidy(c.flow_axis[2])}},
               {"recompute_neighbourhoods", c.recompute_neighbourhoods != 0}};
     if (c.flow_source_enabled != 0)
@@ -132,6 +133,7 @@ void Report::add_frame(size_t index, double time, double step_seconds, const std
     put(f, "time", time);
     if (s) {
         if (PLUMAGE_FILLED(*s, adjusted)) f["adjusted"] = s->adjusted;
+        if (PLUMAGE_FILLED(*s, verified)) f["verified"] = s->verified;
         if (PLUMAGE_FILLED(*s, collision_tests_per_feather)) put(f, "collision_tests_per_feather", s->collision_tests_per_feather);
         if (PLUMAGE_FILLED(*s, priority_changes)) f["priority_changes"] = s->priority_changes;
         if (PLUMAGE_FILLED(*s, reorder_seconds)) put(f, "reorder_seconds", s->reorder_seconds);
@@ -158,6 +160,7 @@ json Report::summary() const {
         else s[key] = *v;
     };
     add("mean_adjusted", "adjusted", 0);
+    add("mean_verified", "verified", 0);
     add("mean_step_seconds", "step_seconds", 0);
     add("max_intersecting_pairs", "intersecting_pairs", 1);
     add("max_body_penetrations", "body_penetrations", 1);

@@ -9,6 +9,7 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
+use super::steps::pose_is_clear;
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather, adjust_feather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
@@ -73,6 +74,38 @@ pub enum Selection<'a> {
         /// θs, radians.
         threshold: f32,
     },
+    /// As [`Propagate`](Self::Propagate), and besides: a feather marked in
+    /// `suspects`, or one of whose obstacles was adjusted at all, is checked
+    /// exactly at its current pose (the validation's tests against its
+    /// obstacles, at their final poses, and the body) and adjusted when the
+    /// check fails. A frame can then leave alone feathers whose
+    /// surroundings moved a little, without letting them intersect.
+    Verify {
+        /// Feathers adjusted in any case.
+        seeds: &'a [bool],
+        /// Feathers checked in any case.
+        suspects: &'a [bool],
+        /// θs, radians.
+        threshold: f32,
+    },
+}
+
+impl Selection<'_> {
+    /// Feathers adjusted in any case, for the propagating selections.
+    fn seeds(&self) -> Option<&[bool]> {
+        match *self {
+            Self::Propagate { seeds, .. } | Self::Verify { seeds, .. } => Some(seeds),
+            Self::All | Self::Subset(_) => None,
+        }
+    }
+
+    /// θs of the propagating selections.
+    fn threshold(&self) -> Option<f32> {
+        match *self {
+            Self::Propagate { threshold, .. } | Self::Verify { threshold, .. } => Some(threshold),
+            Self::All | Self::Subset(_) => None,
+        }
+    }
 }
 
 /// Figures of one ordered adjustment.
@@ -84,6 +117,9 @@ pub struct AdjustStats {
     pub collision_tests: u64,
     /// Adjusted feathers where a pitch or roll limit bound.
     pub clamped: usize,
+    /// Feathers checked exactly and left as they were
+    /// ([`Selection::Verify`]).
+    pub verified: usize,
     /// Levels run (the length of the longest obstacle chain).
     pub levels: usize,
     /// Wall-clock time of the call.
@@ -113,11 +149,13 @@ pub struct Adjuster {
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
+    changed: Vec<bool>,
     adjusted: Vec<bool>,
+    verified: Vec<bool>,
     level_start: Vec<u32>,
     level_items: Vec<u32>,
     cursor: Vec<u32>,
-    outcomes: Vec<Option<AdjustOutcome>>,
+    outcomes: Vec<Visit>,
     workers: Vec<Worker>,
 }
 
@@ -130,6 +168,12 @@ impl Adjuster {
     /// Which feathers the last call adjusted.
     pub fn adjusted(&self) -> &[bool] {
         &self.adjusted
+    }
+
+    /// Which feathers the last call checked exactly and left as they were
+    /// ([`Selection::Verify`]).
+    pub fn verified(&self) -> &[bool] {
+        &self.verified
     }
 
     /// Replaces what [`adjusted`](Self::adjusted) reports, e.g. with the
@@ -211,6 +255,10 @@ impl Adjuster {
             Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => {
                 assert_eq!(s.len(), n, "adjust_in_order: the selection needs one flag per feather")
             }
+            Selection::Verify { seeds, suspects, .. } => assert!(
+                seeds.len() == n && suspects.len() == n,
+                "adjust_in_order: the selection needs one flag per feather"
+            ),
             Selection::All => {}
         }
         self.posed_triangles(frames, shapes, poses);
@@ -223,8 +271,12 @@ impl Adjuster {
         self.workers.iter_mut().for_each(|w| w.obstacles.reserve(longest.saturating_sub(w.obstacles.len())));
         self.moved.clear();
         self.moved.resize(n, false);
+        self.changed.clear();
+        self.changed.resize(n, false);
         self.adjusted.clear();
         self.adjusted.resize(n, false);
+        self.verified.clear();
+        self.verified.resize(n, false);
 
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
         let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
@@ -234,15 +286,25 @@ impl Adjuster {
             }
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
-            run_level(&inputs, items, poses, &self.triangles, &self.moved, outcomes, &mut self.workers);
+            let marks = Marks { moved: &self.moved, changed: &self.changed };
+            run_level(&inputs, items, poses, &self.triangles, marks, outcomes, &mut self.workers);
             for (&i, outcome) in items.iter().zip(outcomes.iter()) {
-                let Some(o) = outcome else { continue };
+                let o = match outcome {
+                    Visit::Adjusted(o) => o,
+                    Visit::Verified => {
+                        self.verified[i as usize] = true;
+                        stats.verified += 1;
+                        continue;
+                    }
+                    Visit::Skipped => continue,
+                };
                 let i = i as usize;
                 let old = poses[i];
-                if let Selection::Propagate { threshold, .. } = selection {
+                if let Some(threshold) = selection.threshold() {
                     self.moved[i] =
                         (o.pose.pitch - old.pitch).abs() > threshold || (o.pose.roll - old.roll).abs() > threshold;
                 }
+                self.changed[i] = o.pose != old;
                 poses[i] = o.pose;
                 self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
                 self.adjusted[i] = true;
@@ -265,15 +327,19 @@ impl Adjuster {
     }
 
     /// Marks the feathers that may be adjusted. With propagation that is
-    /// the seeds and everything downstream of them in the obstacle relation.
+    /// the seeds (and suspects) and everything downstream of them in the
+    /// obstacle relation.
     fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>, selection: Selection<'_>) {
         let n = order.len();
         self.in_scope.clear();
         match selection {
             Selection::All => self.in_scope.resize(n, true),
             Selection::Subset(s) => self.in_scope.extend_from_slice(s),
-            Selection::Propagate { seeds, .. } => {
+            Selection::Propagate { seeds, .. } | Selection::Verify { seeds, .. } => {
                 self.in_scope.extend_from_slice(seeds);
+                if let Selection::Verify { suspects, .. } = selection {
+                    self.in_scope.iter_mut().zip(suspects).for_each(|(s, &v)| *s |= v);
+                }
                 for &i in order {
                     let i = i as usize;
                     if !self.in_scope[i] {
@@ -339,7 +405,7 @@ impl Adjuster {
         }
         let widest = (0..levels).map(|l| (self.level_start[l + 1] - self.level_start[l]) as usize).max().unwrap_or(0);
         if self.outcomes.len() < widest {
-            self.outcomes.resize(widest, None);
+            self.outcomes.resize(widest, Visit::Skipped);
         }
         levels
     }
@@ -368,6 +434,25 @@ struct Inputs<'a> {
     selection: Selection<'a>,
 }
 
+/// What became of one feather of a level.
+#[derive(Clone, Copy, Debug)]
+enum Visit {
+    /// Propagation did not reach it.
+    Skipped,
+    /// Its pose passed the exact check and stays.
+    Verified,
+    /// It was adjusted.
+    Adjusted(AdjustOutcome),
+}
+
+/// What the levels run so far did to each feather: moved past θs, or
+/// changed at all.
+#[derive(Clone, Copy)]
+struct Marks<'a> {
+    moved: &'a [bool],
+    changed: &'a [bool],
+}
+
 /// Adjusts the feathers of one level in parallel chunks; each chunk has its
 /// own worker scratch. Results land in `outcomes` by position.
 fn run_level(
@@ -375,37 +460,42 @@ fn run_level(
     items: &[u32],
     poses: &[FeatherPose],
     triangles: &[[[Vec3; 3]; 2]],
-    moved: &[bool],
-    outcomes: &mut [Option<AdjustOutcome>],
+    marks: Marks<'_>,
+    outcomes: &mut [Visit],
     workers: &mut [Worker],
 ) {
     let chunk = items.len().div_ceil(workers.len()).max(1);
     items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
         |((items, outcomes), worker)| {
             for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
-                *out = adjust_one(inputs, i as usize, poses, triangles, moved, worker);
+                *out = adjust_one(inputs, i as usize, poses, triangles, marks, worker);
             }
         },
     );
 }
 
-/// Adjusts feather `i` against its earlier candidates, or `None` when
-/// propagation does not reach it.
+/// Adjusts feather `i` against its earlier candidates, unless propagation
+/// does not reach it or, verifying, its pose passes the exact check.
 fn adjust_one(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
     triangles: &[[[Vec3; 3]; 2]],
-    moved: &[bool],
+    marks: Marks<'_>,
     worker: &mut Worker,
-) -> Option<AdjustOutcome> {
+) -> Visit {
     let ri = inputs.rank[i];
     let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
-    if let Selection::Propagate { seeds, .. } = inputs.selection
+    let mut verify = false;
+    if let Some(seeds) = inputs.selection.seeds()
         && !seeds[i]
-        && !earlier.clone().any(|j| moved[j])
+        && !earlier.clone().any(|j| marks.moved[j])
     {
-        return None;
+        let Selection::Verify { suspects, .. } = inputs.selection else { return Visit::Skipped };
+        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j]) {
+            return Visit::Skipped;
+        }
+        verify = true;
     }
     worker.obstacles.clear();
     worker.obstacles.extend(earlier.map(|j| ObstacleFeather {
@@ -413,7 +503,11 @@ fn adjust_one(
         thickness: inputs.shapes[j].thickness,
         far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
     }));
-    Some(adjust_feather(
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    if verify && pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field) {
+        return Visit::Verified;
+    }
+    Visit::Adjusted(adjust_feather(
         &inputs.frames[i],
         &inputs.shapes[i],
         poses[i],

@@ -84,7 +84,7 @@ pub fn adjust_feather(
     let mut sizes = SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale);
     let clamped;
     loop {
-        let fits = !choice.too_steep && clear_of_everything(frame, shape, choice.pose, obstacles, body, scratch);
+        let fits = !choice.too_steep && pose_is_clear(frame, shape, choice.pose, obstacles, body, scratch);
         if fits {
             clamped = choice.clamped;
             break;
@@ -108,10 +108,10 @@ pub fn adjust_feather(
     AdjustOutcome { pose: choice.pose, collision_tests, clamped }
 }
 
-/// The exact check of a chosen pose: the feather's triangles meet no
-/// obstacle's, and it does not penetrate the body beyond its root socket
-/// (the tests of [`crate::validation`]).
-fn clear_of_everything(
+/// The exact check of a pose: the feather's triangles meet no obstacle's,
+/// and it does not penetrate the body beyond its root socket (the tests of
+/// [`crate::validation`]). `scratch` lends its body-query buffers.
+pub(crate) fn pose_is_clear(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,

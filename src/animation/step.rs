@@ -18,6 +18,18 @@
 //!    (all three steps; the legacy mode runs fine pitch only), and a feather
 //!    whose pitch or roll moved by more than θs pulls in the feathers that
 //!    lie on it ([`Contacts`]).
+//!
+//! Beyond the paper (incremental, `drift_tolerance` > θs, the default):
+//! the paper's rule readjusts most of a flexing body every frame, because
+//! a readjusted feather that turns by θs pulls in what lies on it, and so
+//! on down the coat. Instead, every feather whose surroundings moved this
+//! frame is checked in order with the exact tests of the validation
+//! against its obstacles at their final poses and the skin, and readjusted
+//! only if the check fails ([`Selection::Verify`]). The readjustments that
+//! remain are for drift: the seeds are the feathers whose surroundings
+//! moved by more than the drift tolerance times their length, and
+//! propagation passes on turns larger than the drift tolerance. `R_k`
+//! (at θs) still selects the pairs whose priorities are recomputed.
 
 use super::contact::Contacts;
 use super::motion::{RootMap, root_maps};
@@ -44,6 +56,9 @@ pub struct StepWorkspace {
     maps: Vec<RootMap>,
     displacement: Vec<f32>,
     seeds: Vec<bool>,
+    suspects: Vec<bool>,
+    no_suspects: Vec<bool>,
+    verified: Vec<bool>,
     r_k: Vec<u32>,
     contacts: Contacts,
     adjusted: Vec<bool>,
@@ -81,10 +96,15 @@ pub fn step_coat(
     surroundings_displacement(coat, dressing, step);
     step.seeds.clear();
     step.seeds.resize(n, false);
+    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
+    let drift = if verify { dressing.drift_tolerance } else { dressing.theta_s };
     let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
-    coat.staleness.add(&step.displacement, limit, &mut step.seeds);
+    coat.staleness.add(&step.displacement, |i| drift * dressing.shapes[i].length, &mut step.seeds);
     step.r_k.clear();
-    step.r_k.extend((0..n as u32).filter(|&i| step.seeds[i as usize]));
+    step.r_k.extend((0..n as u32).filter(|&i| coat.staleness.moved()[i as usize] > limit(i as usize)));
+    step.suspects.clear();
+    step.suspects
+        .extend(step.displacement.iter().enumerate().map(|(i, &d)| verify && d > 1e-6 * dressing.shapes[i].length));
 
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, ..FrameReport::default() };
@@ -113,10 +133,14 @@ pub fn step_coat(
         let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
         let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
         let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
-        let stats =
-            pass.run(&mut work.adjuster, &mut coat.poses, CandidateLists::new(rows.0, rows.1), &step.seeds, &|done| {
-                progress.check(Phase::Adjusting, done).is_ok()
-            });
+        let stats = pass.run(
+            &mut work.adjuster,
+            &mut coat.poses,
+            CandidateLists::new(rows.0, rows.1),
+            &step.seeds,
+            verify.then_some(&step.suspects[..]),
+            &|done| progress.check(Phase::Adjusting, done).is_ok(),
+        );
         // A stopped adjustment (None) has set the progress's stop flag.
         progress.check(Phase::Adjusting, 1.0)?;
         let mut stats = stats.unwrap_or_default();
@@ -135,10 +159,18 @@ pub fn step_coat(
             step.adjusted.clear();
             step.adjusted.extend_from_slice(work.adjuster.adjusted());
             let seeds = step.contacts.missed_flags();
-            let more =
-                pass.run(&mut work.adjuster, &mut coat.poses, CandidateLists::new(offsets, indices), seeds, &|_| {
-                    progress.check(Phase::Adjusting, 1.0).is_ok()
-                });
+            step.verified.clear();
+            step.verified.extend_from_slice(work.adjuster.verified());
+            step.no_suspects.clear();
+            step.no_suspects.resize(n, false);
+            let more = pass.run(
+                &mut work.adjuster,
+                &mut coat.poses,
+                CandidateLists::new(offsets, indices),
+                seeds,
+                verify.then_some(&step.no_suspects[..]),
+                &|_| progress.check(Phase::Adjusting, 1.0).is_ok(),
+            );
             progress.check(Phase::Adjusting, 1.0)?;
             let more = more.unwrap_or_default();
             for (a, &b) in step.adjusted.iter_mut().zip(work.adjuster.adjusted()) {
@@ -146,6 +178,7 @@ pub fn step_coat(
             }
             work.adjuster.set_adjusted(&step.adjusted);
             stats.adjusted = step.adjusted.iter().filter(|a| **a).count();
+            stats.verified = step.verified.iter().zip(&step.adjusted).filter(|(v, a)| **v && !**a).count();
             stats.collision_tests += more.collision_tests;
             // A feather adjusted in both passes may be counted clamped twice.
             stats.clamped = (stats.clamped + more.clamped).min(stats.adjusted);
@@ -155,6 +188,7 @@ pub fn step_coat(
     };
     coat.staleness.clear_adjusted(work.adjuster.adjusted());
     report.adjusted = stats.adjusted;
+    report.verified = stats.verified;
     report.collision_tests = stats.collision_tests;
     report.clamped = stats.clamped;
     report.adjust_seconds = stats.seconds;
@@ -182,9 +216,14 @@ impl Pass<'_> {
         poses: &mut [FeatherPose],
         candidates: CandidateLists<'_>,
         seeds: &[bool],
+        suspects: Option<&[bool]>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
+        let selection = match suspects {
+            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
+            None => Selection::Propagate { seeds, threshold: d.theta_s },
+        };
         adjuster.adjust_in_order_until(
             self.frames,
             &d.shapes,
@@ -195,7 +234,7 @@ impl Pass<'_> {
             self.body,
             &d.adjust_params,
             self.steps,
-            Selection::Propagate { seeds, threshold: d.theta_s },
+            selection,
             keep_going,
         )
     }

@@ -282,6 +282,7 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
             step_seconds: r.step_seconds,
             deformed: r.deformed as u64,
             seeds: r.seeds as u64,
+            verified: r.verified as u64,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
         unsafe { write_versioned(out, std::mem::size_of::<PlumageFrameStats>(), value, "PlumageFrameStats") }

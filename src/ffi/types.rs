@@ -82,6 +82,11 @@ pub struct PlumageConfig {
     pub flow_source_enabled: u32,
     /// Where the derived flow starts (e.g. the beak tip), in model units.
     pub flow_source: [f32; 3],
+    /// Incremental mode: how far a feather may drift (radians, default 0.3)
+    /// before it is readjusted, when every moved feather is checked exactly
+    /// each frame and readjusted at once if it intersects; at or below
+    /// `theta_s`, the paper's rule (readjust at θs, no exact checks).
+    pub drift_tolerance: f32,
 }
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
@@ -218,6 +223,7 @@ impl PlumageConfig {
             progress_user_data: std::ptr::null_mut(),
             flow_source_enabled: u32::from(c.flow_source.is_some()),
             flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
+            drift_tolerance: c.drift_tolerance,
         }
     }
 
@@ -251,6 +257,7 @@ impl PlumageConfig {
             self.fluffiness,
             self.collision_allowance,
             self.theta_s,
+            self.drift_tolerance,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -276,6 +283,7 @@ impl PlumageConfig {
             fluffiness: self.fluffiness,
             collision_allowance: self.collision_allowance,
             theta_s: self.theta_s,
+            drift_tolerance: self.drift_tolerance,
             flow_axis: Vec3::from_array(self.flow_axis),
             recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
             flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
@@ -485,10 +493,14 @@ pub struct PlumageFrameStats {
     /// last adjusted, by more than θs times their length (the paper's R_k);
     /// 0 after create and evaluate.
     pub deformed: u64,
-    /// Feathers readjusted in any case (R*_k: R_k plus those whose
-    /// obstacles the reordering changed); `adjusted` minus this came by
-    /// propagation.
+    /// Feathers readjusted in any case: surroundings moved by more than the
+    /// drift tolerance (θs in the paper's rule) times their length, or
+    /// obstacles changed by the reordering; `adjusted` minus this came by
+    /// propagation or failed the exact check.
     pub seeds: u64,
+    /// Feathers whose surroundings moved that were checked exactly and kept
+    /// their pose (incremental mode with `drift_tolerance` above `theta_s`).
+    pub verified: u64,
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
@@ -517,6 +529,6 @@ const _: () = {
     assert!(size_of::<PlumageFeather>() == 8 + 4 + 4 + 4 * 3 * 4 + 4 * 5 + 4);
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 14);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 15);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 4);
 };
