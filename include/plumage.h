@@ -309,6 +309,14 @@ typedef struct PlumageConfig {
    * Where the derived flow starts (e.g. the beak tip), in model units.
    */
   float flow_source[3];
+  /**
+   * Smallest spacing multiplier the bending of the surface may set, in
+   * (0, 1] (default 0.4; 1 = off): where the surface bends on a radius
+   * shorter than a feather (thin limbs, wing tips, creases), roots are
+   * closer and feathers shorter, down to this fraction. Not applied when
+   * `feather_length` is set.
+   */
+  float curvature_min_scale;
 } PlumageConfig;
 
 /**

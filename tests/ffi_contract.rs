@@ -179,6 +179,25 @@ fn bad_configs_are_refused() {
     expect_refused(&PlumageConfig { lambda: 0.9, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
     expect_refused(&PlumageConfig { spacing: -1.0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
     expect_refused(&PlumageConfig { k_neighbours: 0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { curvature_min_scale: 0.0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { curvature_min_scale: f32::NAN, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
+}
+
+#[test]
+fn a_config_of_the_first_layout_is_accepted_with_defaults_after_it() {
+    // A caller compiled before `curvature_min_scale` was appended: what
+    // follows its struct is not its own (here a value that would be refused).
+    let (pos, idx) = grid_soup();
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+    let mut cfg = unsafe { cfg.assume_init() };
+    cfg.struct_size = std::mem::offset_of!(PlumageConfig, curvature_min_scale) as u32;
+    cfg.curvature_min_scale = -5.0;
+    let d = desc(&pos, &idx);
+    let mut out = null_mut();
+    let st = unsafe { plumage_system_create(&cfg, &d, &mut out) };
+    assert_eq!(st, PLUMAGE_STATUS_OK, "{}", thread_error());
+    unsafe { plumage_system_destroy(out) };
 }
 
 #[test]

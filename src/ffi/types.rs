@@ -82,6 +82,12 @@ pub struct PlumageConfig {
     pub flow_source_enabled: u32,
     /// Where the derived flow starts (e.g. the beak tip), in model units.
     pub flow_source: [f32; 3],
+    /// Smallest spacing multiplier the bending of the surface may set, in
+    /// (0, 1] (default 0.4; 1 = off): where the surface bends on a radius
+    /// shorter than a feather (thin limbs, wing tips, creases), roots are
+    /// closer and feathers shorter, down to this fraction. Not applied when
+    /// `feather_length` is set.
+    pub curvature_min_scale: f32,
 }
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
@@ -134,8 +140,10 @@ impl crate::progress::ProgressSink for HostProgress {
     }
 }
 
-/// The size of the first published `PlumageConfig`; smaller is refused.
-pub(crate) const CONFIG_V1_SIZE: usize = std::mem::size_of::<PlumageConfig>();
+/// The size of the first published `PlumageConfig` (up to `flow_source`;
+/// later fields take their defaults when a caller's struct ends there);
+/// smaller is refused.
+pub(crate) const CONFIG_V1_SIZE: usize = std::mem::offset_of!(PlumageConfig, curvature_min_scale);
 
 /// A mesh handed to `plumage_system_create`, in the caller's own numbering.
 /// Triangle soups (vertices split along UV or normal seams) are welded by
@@ -184,7 +192,7 @@ impl PlumageMeshDesc {
 impl PlumageConfig {
     pub(crate) fn from_config(c: &Config) -> Self {
         Self {
-            struct_size: CONFIG_V1_SIZE as u32,
+            struct_size: std::mem::size_of::<PlumageConfig>() as u32,
             sampler: match c.sampler {
                 SamplerKind::Guided => PLUMAGE_SAMPLER_GUIDED,
                 SamplerKind::Random => PLUMAGE_SAMPLER_RANDOM,
@@ -218,6 +226,7 @@ impl PlumageConfig {
             progress_user_data: std::ptr::null_mut(),
             flow_source_enabled: u32::from(c.flow_source.is_some()),
             flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
+            curvature_min_scale: c.curvature_min_scale,
         }
     }
 
@@ -251,6 +260,7 @@ impl PlumageConfig {
             self.fluffiness,
             self.collision_allowance,
             self.theta_s,
+            self.curvature_min_scale,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -279,6 +289,7 @@ impl PlumageConfig {
             flow_axis: Vec3::from_array(self.flow_axis),
             recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
             flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
+            curvature_min_scale: self.curvature_min_scale,
         };
         cfg.validate()?;
         Ok(cfg)
