@@ -316,6 +316,14 @@ typedef struct PlumageConfig {
    * `theta_s`, the paper's rule (readjust at θs, no exact checks).
    */
   float drift_tolerance;
+  /**
+   * Smallest spacing multiplier the bending of the surface may set, in
+   * (0, 1] (default 0.4; 1 = off): where the surface bends on a radius
+   * shorter than a feather (thin limbs, wing tips, creases), roots are
+   * closer and feathers shorter, down to this fraction. Not applied when
+   * `feather_length` is set.
+   */
+  float curvature_min_scale;
 } PlumageConfig;
 
 /**

@@ -97,6 +97,15 @@ pub struct Config {
     /// Recompute neighbourhoods and obstacle sets at the current pose each
     /// frame (beyond the paper, its Fig. 8 limitation).
     pub recompute_neighbourhoods: bool,
+    /// Smallest spacing multiplier that the bending of the surface may set,
+    /// in (0, 1]; 1 turns the adaptation off. Where the surface bends on a
+    /// radius shorter than a feather (a thin leg or neck, a wing tip, a
+    /// crease), roots are planted closer and their feathers (sized by the
+    /// spacing) are shorter, down to this fraction, so they can wrap the
+    /// part instead of standing off it. Multiplies the host's spacing
+    /// multipliers; off when `feather_length` is set (feathers then do
+    /// not follow the spacing).
+    pub curvature_min_scale: f32,
 }
 
 impl Default for Config {
@@ -126,6 +135,7 @@ impl Default for Config {
             flow_axis: Vec3::X,
             flow_source: None,
             recompute_neighbourhoods: true,
+            curvature_min_scale: 0.4,
         }
     }
 }
@@ -180,6 +190,9 @@ impl Config {
         }
         if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
             return bad(format!("config.flow_axis must be finite and non-zero (got {:?})", self.flow_axis));
+        }
+        if !(self.curvature_min_scale > 0.0 && self.curvature_min_scale <= 1.0) {
+            return bad(format!("config.curvature_min_scale must be in (0, 1] (got {})", self.curvature_min_scale));
         }
         if let Some(p) = self.flow_source.filter(|p| !p.is_finite()) {
             return bad(format!("config.flow_source must be finite (got {p:?})"));

@@ -27,6 +27,10 @@ const DEGENERATE_TANGENT: f32 = 0.05;
 /// Smoothing passes over a field derived from the flow axis.
 const SMOOTHING_ITERATIONS: usize = 4;
 
+/// Smoothing passes over the curvature spacing multiplier, so that the
+/// spacing changes over a few rings of vertices rather than at one.
+const CURVATURE_SMOOTHING: usize = 2;
+
 /// Per-vertex fields of one welded mesh.
 #[derive(Clone, Debug)]
 pub struct Fields {
@@ -81,9 +85,17 @@ impl Fields {
                 smooth_directions(surface, normals, dirs, SMOOTHING_ITERATIONS)
             }
         };
+        let mut spacing_scale = multiplier("spacing_scale", spacing_scale, n)?;
+        if config.curvature_min_scale < 1.0 && config.feather_length <= 0.0 {
+            let length = nominal_feather_length(surface, config);
+            let bend = curvature_spacing(mesh, surface, normals, length, config.curvature_min_scale);
+            for (s, b) in spacing_scale.iter_mut().zip(bend) {
+                *s *= b;
+            }
+        }
         Ok(Self {
             directions,
-            spacing_scale: multiplier("spacing_scale", spacing_scale, n)?,
+            spacing_scale,
             length_scale: multiplier("length_scale", length_scale, n)?,
             width_scale: multiplier("width_scale", width_scale, n)?,
         })
@@ -186,6 +198,51 @@ fn check_values(name: &str, values: &[f32], expected: usize, non_negative: bool)
         }
     }
     Ok(())
+}
+
+/// About how long a feather will be before any multiplier: the default
+/// shape's length for the configured spacing, or for the spacing that
+/// spreads the wanted feather count over the whole surface.
+fn nominal_feather_length(surface: &Surface, config: &Config) -> f32 {
+    let spacing = if config.spacing > 0.0 {
+        config.spacing
+    } else {
+        let target = crate::sampling::target_feathers(config) as f64;
+        (surface.rest_area() / (crate::sampling::GUIDED_PACKING * target)).sqrt() as f32
+    };
+    crate::feather::LENGTH_PER_SPACING * spacing
+}
+
+/// Per vertex, the spacing multiplier the bending of the surface calls for:
+/// `R / L`, clamped to `[min_scale, 1]`, with `L` the nominal feather length
+/// and `R` the smallest radius of curvature along the vertex's edges (edge
+/// length over the angle between the two ends' normals). A feather longer
+/// than the radius it lies on stands off a convex part (a thin leg, a wing
+/// tip) and runs into the far wall of a concave one (a crease); with the
+/// spacing, and so the feather, scaled to the radius it wraps the part.
+/// Smoothed over the neighbours a few times (Jacobi, order-independent).
+fn curvature_spacing(mesh: &WeldedMesh, surface: &Surface, normals: &[Vec3], length: f32, min_scale: f32) -> Vec<f32> {
+    let p = &mesh.positions;
+    let mut scale: Vec<f32> = (0..p.len())
+        .map(|v| {
+            let curvature = surface.vertex_neighbours(v).iter().map(|&u| u as usize).fold(0.0f32, |k, u| {
+                let edge = p[u].distance(p[v]);
+                let angle = normals[u].dot(normals[v]).clamp(-1.0, 1.0).acos();
+                if edge > 0.0 && angle.is_finite() { k.max(angle / edge) } else { k }
+            });
+            let radius = 1.0 / curvature;
+            if (radius / length).is_nan() { 1.0 } else { (radius / length).clamp(min_scale, 1.0) }
+        })
+        .collect();
+    for _ in 0..CURVATURE_SMOOTHING {
+        scale = (0..scale.len())
+            .map(|v| {
+                let ring = surface.vertex_neighbours(v);
+                (scale[v] + ring.iter().map(|&u| scale[u as usize]).sum::<f32>()) / (1 + ring.len()) as f32
+            })
+            .collect();
+    }
+    scale
 }
 
 /// Per vertex, the direction in which the surface distance from the vertex
@@ -333,6 +390,46 @@ mod tests {
         }
         let at = f.direction_at(&s, SurfacePoint { face: 0, bary: [0.2, 0.3, 0.5] }, Vec3::Z);
         assert!((at - Vec3::Y).length() < 1e-5);
+    }
+
+    /// A closed prism of `sides` sides, radius `r` and height `20 r`
+    /// around z, capped.
+    fn prism(r: f32, sides: usize) -> WeldedMesh {
+        let mut pos = Vec::new();
+        for z in [0.0f32, 20.0 * r] {
+            for k in 0..sides {
+                let a = std::f32::consts::TAU * k as f32 / sides as f32;
+                pos.extend_from_slice(&[r * a.cos(), r * a.sin(), z]);
+            }
+        }
+        pos.extend_from_slice(&[0.0, 0.0, 0.0, 0.0, 0.0, 20.0 * r]);
+        let (s, bottom, top) = (sides as u32, 2 * sides as u32, 2 * sides as u32 + 1);
+        let mut idx = Vec::new();
+        for k in 0..s {
+            let j = (k + 1) % s;
+            idx.extend_from_slice(&[k, j, s + j, k, s + j, s + k, bottom, j, k, top, s + k, s + j]);
+        }
+        weld(&MeshInput::new(&pos, &idx)).unwrap()
+    }
+
+    #[test]
+    fn bending_shrinks_the_spacing_down_to_the_limit() {
+        let (thin, thick) = (prism(0.5, 12), prism(50.0, 12));
+        let config = Config { spacing: 1.0, ..Config::default() };
+        let scales = |mesh: &WeldedMesh, config: &Config| {
+            let s = Surface::new(mesh);
+            Fields::new(mesh, &s, None, None, None, None, config).unwrap().vertex_spacing_scales().to_vec()
+        };
+        // A leg of radius 0.5 under feathers 4 long: every vertex at the limit.
+        for &x in &scales(&thin, &config) {
+            assert!((x - config.curvature_min_scale).abs() < 1e-6, "{x}");
+        }
+        // A barrel of radius 50 with 12 sides: bent, but not on the scale of a feather.
+        assert!(scales(&thick, &config).iter().all(|&x| x == 1.0));
+        // Off when turned off, or when the feather length is fixed.
+        for off in [Config { curvature_min_scale: 1.0, ..config.clone() }, Config { feather_length: 2.0, ..config }] {
+            assert!(scales(&thin, &off).iter().all(|&x| x == 1.0));
+        }
     }
 
     #[test]

@@ -379,6 +379,7 @@ impl System {
             flow_axis,
             flow_source,
             recompute_neighbourhoods,
+            curvature_min_scale,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
@@ -414,6 +415,7 @@ impl System {
                 *collision_allowance,
                 *theta_s,
                 *drift_tolerance,
+                *curvature_min_scale,
                 flow_axis.x,
                 flow_axis.y,
                 flow_axis.z,

@@ -4,11 +4,12 @@
 //! the three shared models with a flow from the head (`Config::flow_source`).
 //!
 //! Intersecting pairs and body penetrations must be exactly 0. Coverage is
-//! asserted at the level reached today; the issue's target is 0.95, met by
-//! the sphere (0.98), not yet by the torus (0.94) or the low-poly models
-//! (Flamingo 0.80, Fox 0.92, bird 0.83), where rims facing away from the
-//! flow, thin limbs and the feathers shortened or left out in creases leave
-//! skin bare.
+//! asserted a little below the level reached today; the issue's target is
+//! 0.95, met by the sphere (0.987) and the torus (0.954), nearly by the Fox
+//! (0.949), not yet by the Flamingo (0.83) or the bird (0.83). What is left
+//! bare there: the rims of thin wings (a flat feather over a wing lies
+//! parallel to the rim's normal), feathers pitched up on thin limbs and at
+//! wing roots, and feathers shortened or left out in creases.
 
 mod common;
 
@@ -90,7 +91,7 @@ fn torus(big: f32, small: f32, nu: usize, nv: usize) -> (Shape, Vec<f32>) {
 fn sphere_at_rest_is_collision_free_and_covered() {
     let config = Config { target_feathers: 2000, threads: 2, ..Config::default() };
     let (system, v) = dress(&sphere(40, 80, 10.0), None, &config);
-    assert_collision_free("sphere", &system, &v, 0.95);
+    assert_collision_free("sphere", &system, &v, 0.98);
 }
 
 #[test]
@@ -98,7 +99,7 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
     let (shape, hints) = torus(10.0, 3.0, 120, 40);
     let config = Config { target_feathers: 4000, threads: 2, ..Config::default() };
     let (system, v) = dress(&shape, Some(&hints), &config);
-    assert_collision_free("torus", &system, &v, 0.93);
+    assert_collision_free("torus", &system, &v, 0.95);
 }
 
 /// The three shared models at the sizes of the issue, each with its flow
@@ -106,9 +107,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
 #[test]
 fn shared_models_at_rest_are_collision_free() {
     let models = [
-        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.75),
-        ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.88),
-        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.75),
+        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.82),
+        ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.94),
+        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.81),
     ];
     for (file, feathers, head, min_coverage) in models {
         let Some(shape) = load_model(file) else { continue };

@@ -179,6 +179,35 @@ fn bad_configs_are_refused() {
     expect_refused(&PlumageConfig { lambda: 0.9, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
     expect_refused(&PlumageConfig { spacing: -1.0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
     expect_refused(&PlumageConfig { k_neighbours: 0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { curvature_min_scale: 0.0, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { curvature_min_scale: f32::NAN, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
+    expect_refused(&PlumageConfig { drift_tolerance: -0.1, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    expect_refused(&PlumageConfig { drift_tolerance: f32::INFINITY, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
+}
+
+#[test]
+fn a_config_of_the_first_layout_is_accepted_with_defaults_after_it() {
+    // Callers compiled before `drift_tolerance`, or before
+    // `curvature_min_scale`, were appended: what follows their struct is not
+    // their own (here values that would be refused).
+    let (pos, idx) = grid_soup();
+    let d = desc(&pos, &idx);
+    for end in
+        [std::mem::offset_of!(PlumageConfig, drift_tolerance), std::mem::offset_of!(PlumageConfig, curvature_min_scale)]
+    {
+        let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+        unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+        let mut cfg = unsafe { cfg.assume_init() };
+        cfg.struct_size = end as u32;
+        cfg.curvature_min_scale = -5.0;
+        if end == std::mem::offset_of!(PlumageConfig, drift_tolerance) {
+            cfg.drift_tolerance = -5.0;
+        }
+        let mut out = null_mut();
+        let st = unsafe { plumage_system_create(&cfg, &d, &mut out) };
+        assert_eq!(st, PLUMAGE_STATUS_OK, "{}", thread_error());
+        unsafe { plumage_system_destroy(out) };
+    }
 }
 
 #[test]

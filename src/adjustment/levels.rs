@@ -183,6 +183,13 @@ impl Adjuster {
         self.adjusted.extend_from_slice(flags);
     }
 
+    /// Room in every worker for `longest` obstacles, so that a later call
+    /// with rows up to that long allocates nothing (a frame whose second
+    /// pass uses longer rows than the first may come late).
+    pub fn reserve_obstacles(&mut self, longest: usize) {
+        self.workers.iter_mut().for_each(|w| w.obstacles.reserve(longest.saturating_sub(w.obstacles.len())));
+    }
+
     /// Every feather's two triangles at the poses left by the last call.
     pub fn triangles(&self) -> &[[[Vec3; 3]; 2]] {
         &self.triangles
@@ -268,7 +275,13 @@ impl Adjuster {
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
         let longest = (0..n).map(|i| candidates.of(i).len()).max().unwrap_or(0);
-        self.workers.iter_mut().for_each(|w| w.obstacles.reserve(longest.saturating_sub(w.obstacles.len())));
+        self.reserve_obstacles(longest);
+        // Body queries list each triangle at most once; a rare wide query
+        // (a skin search widening far from the feather) must not grow them.
+        let triangles = body.triangle_count();
+        self.workers
+            .iter_mut()
+            .for_each(|w| w.field.body_ids.reserve(triangles.saturating_sub(w.field.body_ids.len())));
         self.moved.clear();
         self.moved.resize(n, false);
         self.changed.clear();

@@ -102,6 +102,11 @@ pub fn step_coat(
     coat.staleness.add(&step.displacement, |i| drift * dressing.shapes[i].length, &mut step.seeds);
     step.r_k.clear();
     step.r_k.extend((0..n as u32).filter(|&i| coat.staleness.moved()[i as usize] > limit(i as usize)));
+    // The second pass's buffers, sized now: the first frame that needs
+    // them may come late, and the heap must not grow then.
+    step.no_suspects.reserve(n.saturating_sub(step.no_suspects.len()));
+    step.verified.reserve(n.saturating_sub(step.verified.len()));
+    step.adjusted.reserve(n.saturating_sub(step.adjusted.len()));
     step.suspects.clear();
     step.suspects
         .extend(step.displacement.iter().enumerate().map(|(i, &d)| verify && d > 1e-6 * dressing.shapes[i].length));
@@ -133,6 +138,8 @@ pub fn step_coat(
         let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
         let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
         let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
+        let full = CandidateLists::new(offsets, indices);
+        work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
         let stats = pass.run(
             &mut work.adjuster,
             &mut coat.poses,

@@ -87,6 +87,12 @@ pub struct PlumageConfig {
     /// each frame and readjusted at once if it intersects; at or below
     /// `theta_s`, the paper's rule (readjust at θs, no exact checks).
     pub drift_tolerance: f32,
+    /// Smallest spacing multiplier the bending of the surface may set, in
+    /// (0, 1] (default 0.4; 1 = off): where the surface bends on a radius
+    /// shorter than a feather (thin limbs, wing tips, creases), roots are
+    /// closer and feathers shorter, down to this fraction. Not applied when
+    /// `feather_length` is set.
+    pub curvature_min_scale: f32,
 }
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
@@ -139,8 +145,10 @@ impl crate::progress::ProgressSink for HostProgress {
     }
 }
 
-/// The size of the first published `PlumageConfig`; smaller is refused.
-pub(crate) const CONFIG_V1_SIZE: usize = std::mem::size_of::<PlumageConfig>();
+/// The size of the first published `PlumageConfig` (up to `flow_source`;
+/// later fields take their defaults when a caller's struct ends there);
+/// smaller is refused.
+pub(crate) const CONFIG_V1_SIZE: usize = std::mem::offset_of!(PlumageConfig, drift_tolerance);
 
 /// A mesh handed to `plumage_system_create`, in the caller's own numbering.
 /// Triangle soups (vertices split along UV or normal seams) are welded by
@@ -189,7 +197,7 @@ impl PlumageMeshDesc {
 impl PlumageConfig {
     pub(crate) fn from_config(c: &Config) -> Self {
         Self {
-            struct_size: CONFIG_V1_SIZE as u32,
+            struct_size: std::mem::size_of::<PlumageConfig>() as u32,
             sampler: match c.sampler {
                 SamplerKind::Guided => PLUMAGE_SAMPLER_GUIDED,
                 SamplerKind::Random => PLUMAGE_SAMPLER_RANDOM,
@@ -224,6 +232,7 @@ impl PlumageConfig {
             flow_source_enabled: u32::from(c.flow_source.is_some()),
             flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
             drift_tolerance: c.drift_tolerance,
+            curvature_min_scale: c.curvature_min_scale,
         }
     }
 
@@ -258,6 +267,7 @@ impl PlumageConfig {
             self.collision_allowance,
             self.theta_s,
             self.drift_tolerance,
+            self.curvature_min_scale,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -287,6 +297,7 @@ impl PlumageConfig {
             flow_axis: Vec3::from_array(self.flow_axis),
             recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
             flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
+            curvature_min_scale: self.curvature_min_scale,
         };
         cfg.validate()?;
         Ok(cfg)

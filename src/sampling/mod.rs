@@ -41,7 +41,7 @@ pub(crate) const DEFAULT_TARGET_FEATHERS: usize = 2000;
 
 /// Roots per `d²` of (density-weighted) area each sampler typically packs;
 /// only the first guess of the spacing search uses them.
-const GUIDED_PACKING: f64 = 0.75;
+pub(crate) const GUIDED_PACKING: f64 = 0.75;
 const RANDOM_PACKING: f64 = 0.67;
 
 /// Spacing search: at most this many sampling passes, stopping early once
@@ -96,7 +96,7 @@ pub fn sample_roots_with_progress(
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
     let density = DensityField::new(surface, fields, positions, &normals);
-    let target = if config.target_feathers > 0 { config.target_feathers } else { DEFAULT_TARGET_FEATHERS };
+    let target = target_feathers(config);
     let (spacing, pool, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
         (if config.spacing > 0.0 { config.spacing } else { nominal }, None, Vec::new())
@@ -115,6 +115,12 @@ pub fn sample_roots_with_progress(
     let seconds = start.elapsed().as_secs_f64();
     let metrics = sampling_metrics(surface, positions, fields, &roots, spacing, config.theta);
     Ok(Sampling { roots, spacing, metrics, seconds })
+}
+
+/// The feather count aimed at: `config.target_feathers`, or the default
+/// when that is 0.
+pub(crate) fn target_feathers(config: &Config) -> usize {
+    if config.target_feathers > 0 { config.target_feathers } else { DEFAULT_TARGET_FEATHERS }
 }
 
 /// One run of the configured sampler at global spacing `d`: the pool and
