@@ -58,6 +58,31 @@ pub(crate) const SOCKET_FRACTION: f32 = 0.025;
 /// this distance (see [`HeightField::reset`]).
 pub(crate) const JUDGE_FRACTION: f32 = 0.08;
 
+/// Where the grid of a shape lies in the root frame (see the module notes):
+/// cell sizes, the far end along the shaft (`x ≤ far`), the half span
+/// across (`|y| ≤ half_span`) and the floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct GridExtent {
+    pub(crate) dx: f32,
+    pub(crate) dy: f32,
+    pub(crate) far: f32,
+    pub(crate) half_span: f32,
+    pub(crate) floor: f32,
+}
+
+impl GridExtent {
+    /// The extent [`HeightField::reset`] lays for `shape` at resolution
+    /// `(u, v)` (as [`HeightField::set_resolution`] clamps it).
+    pub(crate) fn new(shape: &FeatherShape, u: usize, v: usize, min_pitch: f32) -> Self {
+        let (l, w) = (shape.length, shape.width);
+        let dx = l / (u.max(2) - 1) as f32;
+        let dy = w / (v.max(3) - 2) as f32;
+        let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
+        let floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
+        Self { dx, dy, far: l + dx, half_span: 0.5 * w + dy, floor }
+    }
+}
+
 /// Which layer a triangle goes into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Layer {
@@ -169,12 +194,10 @@ impl HeightField {
     /// footprint. `min_pitch` (radians, ≤ 0) deepens the floor when needed.
     pub fn reset(&mut self, shape: &FeatherShape, min_pitch: f32) {
         self.shape = *shape;
-        let (l, w) = (shape.length, shape.width);
-        self.dx = l / (self.u - 1) as f32;
-        self.dy = w / (self.v - 2) as f32;
-        self.y_min = -0.5 * w - self.dy;
-        let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
-        self.floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
+        let l = shape.length;
+        let grid = GridExtent::new(shape, self.u, self.v, min_pitch);
+        (self.dx, self.dy, self.floor) = (grid.dx, grid.dy, grid.floor);
+        self.y_min = -grid.half_span;
         self.socket_x = SOCKET_FRACTION * l;
         self.body_floor = self.floor.max(-(l + self.dx) * (-min_pitch).max(0.0).tan() - self.dy);
         self.obstacle.fill(self.floor);

@@ -9,6 +9,7 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
+use super::steps::{ObstacleReach, bounding_sphere};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather, adjust_feather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
@@ -110,6 +111,8 @@ struct Worker {
 #[derive(Clone, Debug, Default)]
 pub struct Adjuster {
     triangles: Vec<[[Vec3; 3]; 2]>,
+    /// A bounding sphere of each feather's triangles (centre, radius).
+    spheres: Vec<(Vec3, f32)>,
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
@@ -234,7 +237,8 @@ impl Adjuster {
             }
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
-            run_level(&inputs, items, poses, &self.triangles, &self.moved, outcomes, &mut self.workers);
+            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+            run_level(&inputs, items, poses, posed, &self.moved, outcomes, &mut self.workers);
             for (&i, outcome) in items.iter().zip(outcomes.iter()) {
                 let Some(o) = outcome else { continue };
                 let i = i as usize;
@@ -245,6 +249,7 @@ impl Adjuster {
                 }
                 poses[i] = o.pose;
                 self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+                self.spheres[i] = bounding_sphere(&self.triangles[i]);
                 self.adjusted[i] = true;
                 stats.adjusted += 1;
                 stats.collision_tests += u64::from(o.collision_tests);
@@ -255,13 +260,18 @@ impl Adjuster {
         Some(stats)
     }
 
-    /// Every feather's triangles at its current pose.
+    /// Every feather's triangles at its current pose, and their spheres.
     fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
         self.triangles.resize(frames.len(), [[Vec3::ZERO; 3]; 2]);
+        self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         self.triangles
             .par_iter_mut()
+            .zip(self.spheres.par_iter_mut())
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
-            .for_each(|(t, (f, (s, p)))| *t = feather_triangles(f, s, *p));
+            .for_each(|((t, sphere), (f, (s, p)))| {
+                *t = feather_triangles(f, s, *p);
+                *sphere = bounding_sphere(t);
+            });
     }
 
     /// Marks the feathers that may be adjusted. With propagation that is
@@ -368,13 +378,20 @@ struct Inputs<'a> {
     selection: Selection<'a>,
 }
 
+/// Every feather's triangles at its current pose and a sphere around them.
+#[derive(Clone, Copy)]
+struct Posed<'a> {
+    triangles: &'a [[[Vec3; 3]; 2]],
+    spheres: &'a [(Vec3, f32)],
+}
+
 /// Adjusts the feathers of one level in parallel chunks; each chunk has its
 /// own worker scratch. Results land in `outcomes` by position.
 fn run_level(
     inputs: &Inputs<'_>,
     items: &[u32],
     poses: &[FeatherPose],
-    triangles: &[[[Vec3; 3]; 2]],
+    posed: Posed<'_>,
     moved: &[bool],
     outcomes: &mut [Option<AdjustOutcome>],
     workers: &mut [Worker],
@@ -383,19 +400,20 @@ fn run_level(
     items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
         |((items, outcomes), worker)| {
             for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
-                *out = adjust_one(inputs, i as usize, poses, triangles, moved, worker);
+                *out = adjust_one(inputs, i as usize, poses, posed, moved, worker);
             }
         },
     );
 }
 
 /// Adjusts feather `i` against its earlier candidates, or `None` when
-/// propagation does not reach it.
+/// propagation does not reach it. Candidates that cannot matter to it at
+/// any size and pose (see [`ObstacleReach`]) are not passed on.
 fn adjust_one(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    triangles: &[[[Vec3; 3]; 2]],
+    posed: Posed<'_>,
     moved: &[bool],
     worker: &mut Worker,
 ) -> Option<AdjustOutcome> {
@@ -407,12 +425,20 @@ fn adjust_one(
     {
         return None;
     }
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacles.clear();
-    worker.obstacles.extend(earlier.map(|j| ObstacleFeather {
-        triangles: triangles[j],
-        thickness: inputs.shapes[j].thickness,
-        far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
-    }));
+    worker.obstacles.extend(
+        earlier
+            .filter(|&j| {
+                let (centre, radius) = posed.spheres[j];
+                reach.may_matter(centre, radius, inputs.shapes[j].thickness)
+            })
+            .map(|j| ObstacleFeather {
+                triangles: posed.triangles[j],
+                thickness: inputs.shapes[j].thickness,
+                far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+            }),
+    );
     Some(adjust_feather(
         &inputs.frames[i],
         &inputs.shapes[i],
