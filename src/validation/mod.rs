@@ -196,11 +196,28 @@ pub(crate) fn penetrates_body(
     });
     // Without a crossing each triangle lies on one side of the skin (the two
     // vanes may lie on different sides, meeting it along the shaft): its
-    // first corner clearly off the skin tells which.
-    crosses
-        || part
-            .iter()
-            .any(|t| t.iter().find_map(|&p| side_of_skin(body, p, shape.length, ids)).is_some_and(|under| under))
+    // first corner clearly off the skin tells which. The triangles of one
+    // clipped vane share their first corner, so each distinct corner is
+    // judged once.
+    if crosses {
+        return true;
+    }
+    let mut judged: [(Vec3, Option<bool>); 12] = [(Vec3::NAN, None); 12];
+    let mut count = 0;
+    let mut side = |p: Vec3| {
+        if let Some(&(_, s)) =
+            judged[..count].iter().find(|(q, _)| q.to_array().map(f32::to_bits) == p.to_array().map(f32::to_bits))
+        {
+            return s;
+        }
+        let s = side_of_skin(body, p, shape.length, ids);
+        if count < judged.len() {
+            judged[count] = (p, s);
+            count += 1;
+        }
+        s
+    };
+    part.iter().any(|t| t.iter().find_map(|&p| side(p)).is_some_and(|under| under))
 }
 
 /// Whether two feathers' triangles intersect (the exact test of
