@@ -83,6 +83,21 @@ impl GridExtent {
     }
 }
 
+/// The smaller of two values (plain comparison: inputs are not NaN).
+#[inline(always)]
+fn min_f(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The larger of two values (see [`min_f`]).
+#[inline(always)]
+fn max_f(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// Rows whose spans [`TrianglePlane::row_spans`] computes together.
+const SPAN_ROWS: usize = 8;
+
 /// Which layer a triangle goes into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Layer {
@@ -346,15 +361,20 @@ impl HeightField {
             Layer::Body => &mut self.body,
         };
         let mut touched = false;
+        // Row spans come in chunks of rows (one pass per edge, so that the
+        // rows of a chunk are computed side by side).
+        let mut spans = [(i0, i1); SPAN_ROWS];
         for j in j0..=j1 {
             let vc = j as f32 + 0.5;
-            let (lo, hi) = match &plane {
-                Some(p) => match p.row_span(vc, i0, i1) {
-                    Some(span) => span,
-                    None => continue,
-                },
-                None => (i0, i1),
-            };
+            if let Some(p) = &plane
+                && (j - j0) % SPAN_ROWS == 0
+            {
+                spans = p.row_spans(j, i0, i1);
+            }
+            let (lo, hi) = spans[(j - j0) % SPAN_ROWS];
+            if lo > hi {
+                continue;
+            }
             touched = true;
             let row = &mut cells[j * self.u..(j + 1) * self.u];
             let Some(p) = &plane else {
@@ -473,30 +493,49 @@ impl TrianglePlane {
         self.z0 + self.du * gu + self.dv * gv
     }
 
-    /// Columns `lo..=hi` of row centre `vc` that may touch the triangle,
-    /// within `[i0, i1]`.
+    /// For the rows `j..j + SPAN_ROWS` (centres `j + 0.5`), the columns
+    /// `lo..=hi` that may touch the triangle, within `[i0, i1]`; `lo > hi`
+    /// when none does.
     #[inline]
-    fn row_span(&self, vc: f32, i0: usize, i1: usize) -> Option<(usize, usize)> {
+    fn row_spans(&self, j: usize, i0: usize, i1: usize) -> [(usize, usize); SPAN_ROWS] {
+        let vc: [f32; SPAN_ROWS] = std::array::from_fn(|k| (j + k) as f32 + 0.5);
         // Bounds on the column centre i + 0.5, tightest over the edges,
         // rounded once at the end.
-        let (mut lo, mut hi) = (i0 as f32, i1 as f32);
+        let (mut lo, mut hi) = ([i0 as f32; SPAN_ROWS], [i1 as f32; SPAN_ROWS]);
+        let mut shut = [false; SPAN_ROWS];
         for &[a, b, c, inv_a] in &self.edges {
-            let rest = b * vc + c;
-            // a·(i + 0.5) + rest ≥ 0.
-            let t = -rest * inv_a - 0.5;
+            // a·(i + 0.5) + rest ≥ 0, with rest = b·vc + c.
             if a > 0.0 {
-                lo = if t > lo { t } else { lo };
+                for k in 0..SPAN_ROWS {
+                    let t = -(b * vc[k] + c) * inv_a - 0.5;
+                    lo[k] = if t > lo[k] { t } else { lo[k] };
+                }
             } else if a < 0.0 {
-                hi = if t < hi { t } else { hi };
-            } else if rest < 0.0 {
-                return None;
+                for k in 0..SPAN_ROWS {
+                    let t = -(b * vc[k] + c) * inv_a - 0.5;
+                    hi[k] = if t < hi[k] { t } else { hi[k] };
+                }
+            } else {
+                for k in 0..SPAN_ROWS {
+                    shut[k] |= b * vc[k] + c < 0.0;
+                }
             }
         }
-        if lo > hi {
-            return None;
+        // lo ≥ i0 and hi ≤ i1 (neither is ever NaN); clamped to within one
+        // of the other end, they round the same way or stay out of range.
+        let (far_lo, far_hi) = (i1 as f32 + 1.0, i0 as f32 - 1.0);
+        let mut span = [(1, 0); SPAN_ROWS];
+        for k in 0..SPAN_ROWS {
+            let (l, h) = (min_f(lo[k], far_lo), max_f(hi[k], far_hi));
+            // SAFETY: both lie in [−1, u + 1], well within i32.
+            let (lt, ht) = unsafe { (l.to_int_unchecked::<i32>(), h.to_int_unchecked::<i32>()) };
+            // ⌈l⌉ and ⌊h⌋ (see `ceil_i32`, `floor_i32`).
+            let (l, h) = (lt + i32::from((lt as f32) < l), ht - i32::from((ht as f32) > h));
+            if !shut[k] && l <= h {
+                span[k] = (l as usize, h as usize);
+            }
         }
-        let (lo, hi) = (ceil_i32(lo), floor_i32(hi));
-        (lo <= hi).then_some((lo as usize, hi as usize))
+        span
     }
 }
 
