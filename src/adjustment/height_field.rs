@@ -288,7 +288,8 @@ impl HeightField {
         let reach = self.shape.length + self.dx;
         let band = SKIN_BAND_PER_LENGTH * self.shape.length;
         let mut ids = std::mem::take(&mut self.body_ids);
-        body.triangles_in_box(&self.world_bounds(frame, self.body_floor, band), &mut ids);
+        let band_box = self.world_bounds(frame, self.body_floor, band);
+        body.triangles_in_box(&band_box, &mut ids);
         let mut rises = false;
         for &t in &ids {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
@@ -301,11 +302,12 @@ impl HeightField {
         if rises {
             body.triangles_in_box(&self.world_bounds(frame, self.body_floor, reach), &mut ids);
             for &t in &ids {
-                if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
+                // Those the first search found were rasterised already.
+                if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN || body.grid().bounds(t).overlaps(&band_box) {
                     continue;
                 }
                 let local = to_local3(frame, &body.corners(t));
-                // Triangles wholly within the band were rasterised already.
+                // Triangles wholly within the band are left to the first search.
                 if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
                     self.rasterise(Layer::Body, local, 0.0);
                 }
