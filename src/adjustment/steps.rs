@@ -32,7 +32,7 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
-use crate::validation::{feathers_intersect, penetrates_body};
+use crate::validation::{FeatherBoxes, penetrates_body};
 use glam::Vec3;
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
@@ -175,7 +175,8 @@ fn clear_of_everything(
     scratch: &mut HeightField,
 ) -> bool {
     let mine = feather_triangles(frame, shape, pose);
-    if obstacles.iter().any(|o| feathers_intersect(&mine, &o.triangles)) {
+    let mine = FeatherBoxes::new(&mine);
+    if obstacles.iter().any(|o| mine.intersects(&o.triangles)) {
         return false;
     }
     !penetrates_body(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids)

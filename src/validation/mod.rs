@@ -220,17 +220,35 @@ pub(crate) fn penetrates_body(
     part.iter().any(|t| t.iter().find_map(|&p| side(p)).is_some_and(|under| under))
 }
 
-/// Whether two feathers' triangles intersect (the exact test of
-/// [`intersecting_pairs`], bounding boxes first).
-pub(crate) fn feathers_intersect(a: &[[Vec3; 3]; 2], b: &[[Vec3; 3]; 2]) -> bool {
-    let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
-    a.iter().any(|ta| {
-        let box_a = Aabb::of_triangle(ta);
-        !box_a.is_point()
-            && b.iter()
-                .zip(&boxes_b)
-                .any(|(tb, box_b)| !box_b.is_point() && box_a.overlaps(box_b) && triangles_intersect(ta, tb))
-    })
+/// A feather's two triangles with their bounding boxes, for testing one
+/// feather against many with [`FeatherBoxes::intersects`].
+pub(crate) struct FeatherBoxes<'a> {
+    triangles: &'a [[Vec3; 3]; 2],
+    boxes: [Aabb; 2],
+    whole: Aabb,
+}
+
+impl<'a> FeatherBoxes<'a> {
+    pub(crate) fn new(triangles: &'a [[Vec3; 3]; 2]) -> Self {
+        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
+        Self { triangles, boxes, whole: boxes[0].union(&boxes[1]) }
+    }
+
+    /// Whether these triangles intersect `b`'s (the exact test of
+    /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
+    /// feathers, then of each pair of triangles).
+    pub(crate) fn intersects(&self, b: &[[Vec3; 3]; 2]) -> bool {
+        let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
+        if !self.whole.overlaps(&boxes_b[0].union(&boxes_b[1])) {
+            return false;
+        }
+        self.triangles.iter().zip(&self.boxes).any(|(ta, box_a)| {
+            !box_a.is_point()
+                && b.iter()
+                    .zip(&boxes_b)
+                    .any(|(tb, box_b)| !box_b.is_point() && box_a.overlaps(box_b) && triangles_intersect(ta, tb))
+        })
+    }
 }
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,
