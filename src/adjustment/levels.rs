@@ -427,18 +427,16 @@ fn adjust_one(
     }
     let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacles.clear();
-    worker.obstacles.extend(
-        earlier
-            .filter(|&j| {
-                let (centre, radius) = posed.spheres[j];
-                reach.may_matter(centre, radius, inputs.shapes[j].thickness)
-            })
-            .map(|j| ObstacleFeather {
-                triangles: posed.triangles[j],
-                thickness: inputs.shapes[j].thickness,
-                far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
-            }),
-    );
+    worker.obstacles.extend(earlier.filter_map(|j| {
+        let (centre, radius) = posed.spheres[j];
+        let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness)?;
+        Some(ObstacleFeather {
+            triangles: posed.triangles[j],
+            thickness: inputs.shapes[j].thickness,
+            // Out of the column, rasterising would find nothing.
+            far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+        })
+    }));
     Some(adjust_feather(
         &inputs.frames[i],
         &inputs.shapes[i],

@@ -140,9 +140,11 @@ impl ObstacleReach {
     }
 
     /// Whether an obstacle inside the sphere (`centre`, `radius`), whose
-    /// top lies `thickness` above it, may matter. NaN input is kept.
+    /// top lies `thickness` above it, may matter: `None` when it cannot,
+    /// else whether it may be rasterised (`false`: only the exact check
+    /// can meet it). NaN input is kept whole.
     #[inline]
-    pub(crate) fn may_matter(&self, centre: Vec3, radius: f32, thickness: f32) -> bool {
+    pub(crate) fn may_matter(&self, centre: Vec3, radius: f32, thickness: f32) -> Option<bool> {
         let m = self.margin + 1e-5 * (radius + centre.abs().max_element());
         let d = centre - self.frame.position;
         let c = Vec3::new(d.dot(self.frame.tangent), d.dot(self.frame.binormal), d.dot(self.frame.normal));
@@ -151,7 +153,7 @@ impl ObstacleReach {
             || c.y.abs() - radius > self.half_span + m
             || c.z + radius + thickness.max(0.0) < self.floor - m;
         let out_of_ball = d.length() > self.ball + radius + m;
-        !(out_of_column && out_of_ball)
+        (!(out_of_column && out_of_ball)).then_some(!out_of_column)
     }
 }
 
