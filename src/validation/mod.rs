@@ -5,6 +5,7 @@
 
 mod tri_tri;
 
+use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid, ray_triangle};
@@ -190,9 +191,15 @@ pub(crate) fn penetrates_body(
         return false;
     };
     body.triangles_in_box(&bounds, ids);
+    // Each triangle prepared once for all its tests.
+    let mut prepared = [Prepared::of(&part[0]); 4];
+    for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
+        *p = Prepared::of(t);
+    }
+    let prepared = &prepared[..part.len().min(4)];
     let crosses = ids.iter().any(|&t| {
-        let tri = body.corners(t);
-        part.iter().any(|p| triangles_intersect(p, &tri))
+        let tri = Prepared::of(&body.corners(t));
+        prepared.iter().any(|p| prepared_intersect(p, &tri))
     });
     // Without a crossing each triangle lies on one side of the skin (the two
     // vanes may lie on different sides, meeting it along the shaft): its
@@ -222,16 +229,17 @@ pub(crate) fn penetrates_body(
 
 /// A feather's two triangles with their bounding boxes, for testing one
 /// feather against many with [`FeatherBoxes::intersects`].
-pub(crate) struct FeatherBoxes<'a> {
-    triangles: &'a [[Vec3; 3]; 2],
+pub(crate) struct FeatherBoxes {
+    prepared: [Prepared; 2],
     boxes: [Aabb; 2],
     whole: Aabb,
 }
 
-impl<'a> FeatherBoxes<'a> {
-    pub(crate) fn new(triangles: &'a [[Vec3; 3]; 2]) -> Self {
+impl FeatherBoxes {
+    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
-        Self { triangles, boxes, whole: boxes[0].union(&boxes[1]) }
+        let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
+        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]) }
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
@@ -242,11 +250,14 @@ impl<'a> FeatherBoxes<'a> {
         if !self.whole.overlaps(&boxes_b[0].union(&boxes_b[1])) {
             return false;
         }
-        self.triangles.iter().zip(&self.boxes).any(|(ta, box_a)| {
+        let mut prepared_b: [Option<Prepared>; 2] = [None; 2];
+        self.prepared.iter().zip(&self.boxes).any(|(ta, box_a)| {
             !box_a.is_point()
-                && b.iter()
-                    .zip(&boxes_b)
-                    .any(|(tb, box_b)| !box_b.is_point() && box_a.overlaps(box_b) && triangles_intersect(ta, tb))
+                && b.iter().zip(&boxes_b).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
+                    !box_b.is_point()
+                        && box_a.overlaps(box_b)
+                        && prepared_intersect(ta, pb.get_or_insert_with(|| Prepared::of(tb)))
+                })
         })
     }
 }
