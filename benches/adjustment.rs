@@ -1,16 +1,32 @@
 //! Height-field adjustment speed: one feather (fill + three steps) against
 //! about ten obstacles, and ordered adjustment of a few thousand feathers
-//! on one core and on the whole default pool.
+//! on one core and on the whole default pool: a plane, a sphere and the
+//! Flamingo at rest as the library dresses it (2000 feathers, flow from the
+//! head; skipped when the model is not available, see
+//! `tests/common/gltf_mesh.rs`), whose per-feather time is the figure of
+//! the static adjustment.
+
+#[path = "../tests/common/mod.rs"]
+#[allow(dead_code)]
+mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
+use plumage::Config;
 use plumage::adjustment::{
     AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection, adjust_feather,
 };
 use plumage::body::BodyIndex;
+use plumage::coat::{Coat, Dressing, Workspace};
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
+use plumage::field::Fields;
 use plumage::geometry::RootFrame;
+use plumage::mesh::{MeshInput, weld};
+use plumage::ordering::NeighbourParams;
+use plumage::progress::Progress;
 use plumage::rng::Rng;
+use plumage::sampling::sample_roots_with_progress;
+use plumage::surface::Surface;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -23,6 +39,7 @@ struct Scene {
     rank: Vec<u32>,
     offsets: Vec<u32>,
     candidates: Vec<u32>,
+    params: AdjustParams,
 }
 
 impl Scene {
@@ -49,7 +66,49 @@ impl Scene {
             }
             offsets.push(candidates.len() as u32);
         }
-        Scene { body, frames, shapes, order, rank, offsets, candidates }
+        Scene { body, frames, shapes, order, rank, offsets, candidates, params: AdjustParams::default() }
+    }
+
+    /// The Flamingo at rest as `System::new` dresses it on one thread:
+    /// its roots, order, obstacle candidates and body, taken from the
+    /// solved coat.
+    fn flamingo() -> Option<Self> {
+        let model = common::gltf_mesh::load_model("Flamingo.glb")?;
+        let head = Vec3::new(0.0, 0.0, 100.4);
+        let config = Config { target_feathers: 2000, threads: 1, flow_source: Some(head), ..Config::default() };
+        let mesh = weld(&MeshInput::new(&model.positions, &model.indices)).ok()?;
+        let surface = Surface::new(&mesh);
+        let fields = Fields::new(&mesh, &surface, None, None, None, None, &config).ok()?;
+        let sampling = sample_roots_with_progress(&mesh, &surface, &fields, &config, &Progress::none()).ok()?;
+        let shapes = Dressing::shapes_for(&sampling.roots, &config);
+        let dressing = Dressing {
+            surface,
+            triangles: mesh.triangles.clone(),
+            source_triangle: mesh.source_triangle.clone(),
+            reach: shapes.iter().map(|s| s.length).collect(),
+            shapes,
+            roots: sampling.roots,
+            neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
+            adjust_params: AdjustParams::from_config(&config),
+            mode: config.mode,
+            gamma: config.gamma,
+            lambda: config.lambda,
+            theta_s: config.theta_s,
+            recompute_neighbourhoods: config.recompute_neighbourhoods,
+        };
+        let mut coat = Coat::default();
+        coat.solve(&dressing, &mesh.positions, &mut Workspace::default(), &Progress::none()).ok()?;
+        let (offsets, candidates) = coat.neighbourhoods.obstacle_csr();
+        Some(Scene {
+            offsets: offsets.to_vec(),
+            candidates: candidates.to_vec(),
+            order: coat.order.order().to_vec(),
+            rank: coat.order.ranks().to_vec(),
+            body: coat.body,
+            frames: coat.frames,
+            shapes: dressing.shapes,
+            params: dressing.adjust_params,
+        })
     }
 
     fn adjust(&self, adjuster: &mut Adjuster, poses: &mut [FeatherPose]) -> plumage::adjustment::AdjustStats {
@@ -61,7 +120,7 @@ impl Scene {
             &self.rank,
             CandidateLists::new(&self.offsets, &self.candidates),
             &self.body,
-            &AdjustParams::default(),
+            &self.params,
             AdjustSteps::Full,
             Selection::All,
         )
@@ -190,7 +249,12 @@ fn one_feather(c: &mut Criterion) {
 fn in_order(c: &mut Criterion) {
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
     let mut group = c.benchmark_group("adjust_in_order");
-    for (name, scene) in [("plane", plane_scene(70.0, 50.0)), ("sphere", sphere_scene(3000))] {
+    let scenes = [
+        ("plane", Some(plane_scene(70.0, 50.0))),
+        ("sphere", Some(sphere_scene(3000))),
+        ("flamingo", Scene::flamingo()),
+    ];
+    for (name, scene) in scenes.into_iter().filter_map(|(name, s)| Some((name, s?))) {
         let n = scene.frames.len();
         group.throughput(Throughput::Elements(n as u64));
         let mut adjuster = Adjuster::new();

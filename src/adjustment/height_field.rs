@@ -58,6 +58,46 @@ pub(crate) const SOCKET_FRACTION: f32 = 0.025;
 /// this distance (see [`HeightField::reset`]).
 pub(crate) const JUDGE_FRACTION: f32 = 0.08;
 
+/// Where the grid of a shape lies in the root frame (see the module notes):
+/// cell sizes, the far end along the shaft (`x ≤ far`), the half span
+/// across (`|y| ≤ half_span`) and the floor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct GridExtent {
+    pub(crate) dx: f32,
+    pub(crate) dy: f32,
+    pub(crate) far: f32,
+    pub(crate) half_span: f32,
+    pub(crate) floor: f32,
+}
+
+impl GridExtent {
+    /// The extent [`HeightField::reset`] lays for `shape` at resolution
+    /// `(u, v)` (as [`HeightField::set_resolution`] clamps it).
+    pub(crate) fn new(shape: &FeatherShape, u: usize, v: usize, min_pitch: f32) -> Self {
+        let (l, w) = (shape.length, shape.width);
+        let dx = l / (u.max(2) - 1) as f32;
+        let dy = w / (v.max(3) - 2) as f32;
+        let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
+        let floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
+        Self { dx, dy, far: l + dx, half_span: 0.5 * w + dy, floor }
+    }
+}
+
+/// The smaller of two values (plain comparison: inputs are not NaN).
+#[inline(always)]
+fn min_f(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The larger of two values (see [`min_f`]).
+#[inline(always)]
+fn max_f(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// Rows whose spans [`TrianglePlane::row_spans`] computes together.
+const SPAN_ROWS: usize = 8;
+
 /// Which layer a triangle goes into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Layer {
@@ -169,12 +209,10 @@ impl HeightField {
     /// footprint. `min_pitch` (radians, ≤ 0) deepens the floor when needed.
     pub fn reset(&mut self, shape: &FeatherShape, min_pitch: f32) {
         self.shape = *shape;
-        let (l, w) = (shape.length, shape.width);
-        self.dx = l / (self.u - 1) as f32;
-        self.dy = w / (self.v - 2) as f32;
-        self.y_min = -0.5 * w - self.dy;
-        let droop = l * (-min_pitch).max(0.0).tan() + 0.5 * w;
-        self.floor = -(FLOOR_DEPTH_PER_LENGTH * l).max(droop);
+        let l = shape.length;
+        let grid = GridExtent::new(shape, self.u, self.v, min_pitch);
+        (self.dx, self.dy, self.floor) = (grid.dx, grid.dy, grid.floor);
+        self.y_min = -grid.half_span;
         self.socket_x = SOCKET_FRACTION * l;
         self.body_floor = self.floor.max(-(l + self.dx) * (-min_pitch).max(0.0).tan() - self.dy);
         self.obstacle.fill(self.floor);
@@ -250,7 +288,8 @@ impl HeightField {
         let reach = self.shape.length + self.dx;
         let band = SKIN_BAND_PER_LENGTH * self.shape.length;
         let mut ids = std::mem::take(&mut self.body_ids);
-        body.triangles_in_box(&self.world_bounds(frame, self.body_floor, band), &mut ids);
+        let band_box = self.world_bounds(frame, self.body_floor, band);
+        body.triangles_in_box(&band_box, &mut ids);
         let mut rises = false;
         for &t in &ids {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
@@ -263,11 +302,12 @@ impl HeightField {
         if rises {
             body.triangles_in_box(&self.world_bounds(frame, self.body_floor, reach), &mut ids);
             for &t in &ids {
-                if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
+                // Those the first search found were rasterised already.
+                if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN || body.grid().bounds(t).overlaps(&band_box) {
                     continue;
                 }
                 let local = to_local3(frame, &body.corners(t));
-                // Triangles wholly within the band were rasterised already.
+                // Triangles wholly within the band are left to the first search.
                 if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
                     self.rasterise(Layer::Body, local, 0.0);
                 }
@@ -323,15 +363,20 @@ impl HeightField {
             Layer::Body => &mut self.body,
         };
         let mut touched = false;
+        // Row spans come in chunks of rows (one pass per edge, so that the
+        // rows of a chunk are computed side by side).
+        let mut spans = [(i0, i1); SPAN_ROWS];
         for j in j0..=j1 {
             let vc = j as f32 + 0.5;
-            let (lo, hi) = match &plane {
-                Some(p) => match p.row_span(vc, i0, i1) {
-                    Some(span) => span,
-                    None => continue,
-                },
-                None => (i0, i1),
-            };
+            if let Some(p) = &plane
+                && (j - j0) % SPAN_ROWS == 0
+            {
+                spans = p.row_spans(j, i0, i1);
+            }
+            let (lo, hi) = spans[(j - j0) % SPAN_ROWS];
+            if lo > hi {
+                continue;
+            }
             touched = true;
             let row = &mut cells[j * self.u..(j + 1) * self.u];
             let Some(p) = &plane else {
@@ -450,30 +495,49 @@ impl TrianglePlane {
         self.z0 + self.du * gu + self.dv * gv
     }
 
-    /// Columns `lo..=hi` of row centre `vc` that may touch the triangle,
-    /// within `[i0, i1]`.
+    /// For the rows `j..j + SPAN_ROWS` (centres `j + 0.5`), the columns
+    /// `lo..=hi` that may touch the triangle, within `[i0, i1]`; `lo > hi`
+    /// when none does.
     #[inline]
-    fn row_span(&self, vc: f32, i0: usize, i1: usize) -> Option<(usize, usize)> {
+    fn row_spans(&self, j: usize, i0: usize, i1: usize) -> [(usize, usize); SPAN_ROWS] {
+        let vc: [f32; SPAN_ROWS] = std::array::from_fn(|k| (j + k) as f32 + 0.5);
         // Bounds on the column centre i + 0.5, tightest over the edges,
         // rounded once at the end.
-        let (mut lo, mut hi) = (i0 as f32, i1 as f32);
+        let (mut lo, mut hi) = ([i0 as f32; SPAN_ROWS], [i1 as f32; SPAN_ROWS]);
+        let mut shut = [false; SPAN_ROWS];
         for &[a, b, c, inv_a] in &self.edges {
-            let rest = b * vc + c;
-            // a·(i + 0.5) + rest ≥ 0.
-            let t = -rest * inv_a - 0.5;
+            // a·(i + 0.5) + rest ≥ 0, with rest = b·vc + c.
             if a > 0.0 {
-                lo = if t > lo { t } else { lo };
+                for k in 0..SPAN_ROWS {
+                    let t = -(b * vc[k] + c) * inv_a - 0.5;
+                    lo[k] = if t > lo[k] { t } else { lo[k] };
+                }
             } else if a < 0.0 {
-                hi = if t < hi { t } else { hi };
-            } else if rest < 0.0 {
-                return None;
+                for k in 0..SPAN_ROWS {
+                    let t = -(b * vc[k] + c) * inv_a - 0.5;
+                    hi[k] = if t < hi[k] { t } else { hi[k] };
+                }
+            } else {
+                for k in 0..SPAN_ROWS {
+                    shut[k] |= b * vc[k] + c < 0.0;
+                }
             }
         }
-        if lo > hi {
-            return None;
+        // lo ≥ i0 and hi ≤ i1 (neither is ever NaN); clamped to within one
+        // of the other end, they round the same way or stay out of range.
+        let (far_lo, far_hi) = (i1 as f32 + 1.0, i0 as f32 - 1.0);
+        let mut span = [(1, 0); SPAN_ROWS];
+        for k in 0..SPAN_ROWS {
+            let (l, h) = (min_f(lo[k], far_lo), max_f(hi[k], far_hi));
+            // SAFETY: both lie in [−1, u + 1], well within i32.
+            let (lt, ht) = unsafe { (l.to_int_unchecked::<i32>(), h.to_int_unchecked::<i32>()) };
+            // ⌈l⌉ and ⌊h⌋ (see `ceil_i32`, `floor_i32`).
+            let (l, h) = (lt + i32::from((lt as f32) < l), ht - i32::from((ht as f32) > h));
+            if !shut[k] && l <= h {
+                span[k] = (l as usize, h as usize);
+            }
         }
-        let (lo, hi) = (ceil_i32(lo), floor_i32(hi));
-        (lo <= hi).then_some((lo as usize, hi as usize))
+        span
     }
 }
 

@@ -9,7 +9,7 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
-use super::steps::pose_is_clear;
+use super::steps::{ObstacleReach, bounding_sphere, pose_is_clear};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather, adjust_feather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
@@ -146,6 +146,8 @@ struct Worker {
 #[derive(Clone, Debug, Default)]
 pub struct Adjuster {
     triangles: Vec<[[Vec3; 3]; 2]>,
+    /// A bounding sphere of each feather's triangles (centre, radius).
+    spheres: Vec<(Vec3, f32)>,
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
@@ -300,7 +302,8 @@ impl Adjuster {
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed };
-            run_level(&inputs, items, poses, &self.triangles, marks, outcomes, &mut self.workers);
+            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+            run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
             for (&i, outcome) in items.iter().zip(outcomes.iter()) {
                 let o = match outcome {
                     Visit::Adjusted(o) => o,
@@ -320,6 +323,7 @@ impl Adjuster {
                 self.changed[i] = o.pose != old;
                 poses[i] = o.pose;
                 self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+                self.spheres[i] = bounding_sphere(&self.triangles[i]);
                 self.adjusted[i] = true;
                 stats.adjusted += 1;
                 stats.collision_tests += u64::from(o.collision_tests);
@@ -330,13 +334,18 @@ impl Adjuster {
         Some(stats)
     }
 
-    /// Every feather's triangles at its current pose.
+    /// Every feather's triangles at its current pose, and their spheres.
     fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
         self.triangles.resize(frames.len(), [[Vec3::ZERO; 3]; 2]);
+        self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         self.triangles
             .par_iter_mut()
+            .zip(self.spheres.par_iter_mut())
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
-            .for_each(|(t, (f, (s, p)))| *t = feather_triangles(f, s, *p));
+            .for_each(|((t, sphere), (f, (s, p)))| {
+                *t = feather_triangles(f, s, *p);
+                *sphere = bounding_sphere(t);
+            });
     }
 
     /// Marks the feathers that may be adjusted. With propagation that is
@@ -466,13 +475,20 @@ struct Marks<'a> {
     changed: &'a [bool],
 }
 
+/// Every feather's triangles at its current pose and a sphere around them.
+#[derive(Clone, Copy)]
+struct Posed<'a> {
+    triangles: &'a [[[Vec3; 3]; 2]],
+    spheres: &'a [(Vec3, f32)],
+}
+
 /// Adjusts the feathers of one level in parallel chunks; each chunk has its
 /// own worker scratch. Results land in `outcomes` by position.
 fn run_level(
     inputs: &Inputs<'_>,
     items: &[u32],
     poses: &[FeatherPose],
-    triangles: &[[[Vec3; 3]; 2]],
+    posed: Posed<'_>,
     marks: Marks<'_>,
     outcomes: &mut [Visit],
     workers: &mut [Worker],
@@ -481,7 +497,7 @@ fn run_level(
     items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
         |((items, outcomes), worker)| {
             for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
-                *out = adjust_one(inputs, i as usize, poses, triangles, marks, worker);
+                *out = adjust_one(inputs, i as usize, poses, posed, marks, worker);
             }
         },
     );
@@ -489,11 +505,13 @@ fn run_level(
 
 /// Adjusts feather `i` against its earlier candidates, unless propagation
 /// does not reach it or, verifying, its pose passes the exact check.
+/// Candidates that cannot matter to it at any size and pose (see
+/// [`ObstacleReach`]) are not passed on.
 fn adjust_one(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    triangles: &[[[Vec3; 3]; 2]],
+    posed: Posed<'_>,
     marks: Marks<'_>,
     worker: &mut Worker,
 ) -> Visit {
@@ -510,11 +528,17 @@ fn adjust_one(
         }
         verify = true;
     }
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacles.clear();
-    worker.obstacles.extend(earlier.map(|j| ObstacleFeather {
-        triangles: triangles[j],
-        thickness: inputs.shapes[j].thickness,
-        far_side: inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+    worker.obstacles.extend(earlier.filter_map(|j| {
+        let (centre, radius) = posed.spheres[j];
+        let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness)?;
+        Some(ObstacleFeather {
+            triangles: posed.triangles[j],
+            thickness: inputs.shapes[j].thickness,
+            // Out of the column, rasterising would find nothing.
+            far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+        })
     }));
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
     if verify && pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field) {

@@ -127,7 +127,9 @@ pub struct ObstacleFeather {
     pub thickness: f32,
     /// Whether it grows from the far side of a thin part (its normal turned
     /// away from the adjusted feather's): a height field cannot represent
-    /// it, so it is only checked exactly, never rasterised.
+    /// it, so it is only checked exactly, never rasterised. The adjuster
+    /// also sets it for obstacles wholly outside the column over the
+    /// feather's grid, where rasterising would find nothing.
     pub far_side: bool,
 }
 

@@ -27,12 +27,13 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{ceil_i32, floor_i32};
+use super::height_field::{GridExtent, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
-use crate::validation::{feathers_intersect, penetrates_body};
+use crate::validation::{FeatherBoxes, penetrates_body};
+use glam::Vec3;
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
 /// two to five.
@@ -108,6 +109,62 @@ pub fn adjust_feather(
     AdjustOutcome { pose: choice.pose, collision_tests, clamped }
 }
 
+/// Where an obstacle must reach to matter to [`adjust_feather`] for one
+/// feather, at any size it may be given (≤ its shape) and any pose. An
+/// obstacle, bounded by a sphere, matters when it may be rasterised (it
+/// meets the column over the grid, from the lowest floor up) or may meet
+/// the posed feather in the exact check (it meets the ball around the root
+/// that holds the kite at every pitch and roll). Leaving out the others
+/// changes nothing: [`HeightField::add_obstacle`] would reject them and the
+/// exact test cannot find an intersection. The tests keep a margin far
+/// above f32 rounding, so a doubtful case is kept.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ObstacleReach {
+    frame: RootFrame,
+    far: f32,
+    half_span: f32,
+    floor: f32,
+    ball: f32,
+    margin: f32,
+}
+
+impl ObstacleReach {
+    /// The reach of feather `shape` at `frame` under `params`.
+    pub(crate) fn new(frame: &RootFrame, shape: &FeatherShape, params: &AdjustParams) -> Self {
+        let grid = GridExtent::new(shape, params.height_field_u, params.height_field_v, params.min_pitch);
+        // Shorter sizes lie in the same column (x ≥ 0 covers every root
+        // socket) above the full size's floor, which is the lowest.
+        let ball = shape.kite_corners().iter().map(|c| c.length()).fold(0.0f32, f32::max);
+        let margin = 1e-4 * (grid.far + grid.half_span - grid.floor) + 1e-5 * frame.position.abs().max_element();
+        Self { frame: *frame, far: grid.far, half_span: grid.half_span, floor: grid.floor, ball, margin }
+    }
+
+    /// Whether an obstacle inside the sphere (`centre`, `radius`), whose
+    /// top lies `thickness` above it, may matter: `None` when it cannot,
+    /// else whether it may be rasterised (`false`: only the exact check
+    /// can meet it). NaN input is kept whole.
+    #[inline]
+    pub(crate) fn may_matter(&self, centre: Vec3, radius: f32, thickness: f32) -> Option<bool> {
+        let m = self.margin + 1e-5 * (radius + centre.abs().max_element());
+        let d = centre - self.frame.position;
+        let c = Vec3::new(d.dot(self.frame.tangent), d.dot(self.frame.binormal), d.dot(self.frame.normal));
+        let out_of_column = c.x + radius < -m
+            || c.x - radius > self.far + m
+            || c.y.abs() - radius > self.half_span + m
+            || c.z + radius + thickness.max(0.0) < self.floor - m;
+        let out_of_ball = d.length() > self.ball + radius + m;
+        (!(out_of_column && out_of_ball)).then_some(!out_of_column)
+    }
+}
+
+/// A sphere around a feather's two triangles: centre and radius.
+pub(crate) fn bounding_sphere(triangles: &[[Vec3; 3]; 2]) -> (Vec3, f32) {
+    let [[root, tip, left], [_, right, _]] = *triangles;
+    let centre = 0.25 * (root + tip + left + right);
+    let radius = [root, tip, left, right].iter().map(|p| (*p - centre).length()).fold(0.0f32, f32::max);
+    (centre, radius)
+}
+
 /// The exact check of a pose: the feather's triangles meet no obstacle's,
 /// and it does not penetrate the body beyond its root socket (the tests of
 /// [`crate::validation`]). `scratch` lends its body-query buffers.
@@ -120,7 +177,8 @@ pub(crate) fn pose_is_clear(
     scratch: &mut HeightField,
 ) -> bool {
     let mine = feather_triangles(frame, shape, pose);
-    if obstacles.iter().any(|o| feathers_intersect(&mine, &o.triangles)) {
+    let mine = FeatherBoxes::new(&mine);
+    if obstacles.iter().any(|o| mine.intersects(&o.triangles)) {
         return false;
     }
     !penetrates_body(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids)

@@ -5,6 +5,7 @@
 
 mod tri_tri;
 
+use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid, ray_triangle};
@@ -190,30 +191,75 @@ pub(crate) fn penetrates_body(
         return false;
     };
     body.triangles_in_box(&bounds, ids);
+    // Each triangle prepared once for all its tests.
+    let mut prepared = [Prepared::of(&part[0]); 4];
+    for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
+        *p = Prepared::of(t);
+    }
+    let prepared = &prepared[..part.len().min(4)];
     let crosses = ids.iter().any(|&t| {
-        let tri = body.corners(t);
-        part.iter().any(|p| triangles_intersect(p, &tri))
+        let tri = Prepared::of(&body.corners(t));
+        prepared.iter().any(|p| prepared_intersect(p, &tri))
     });
     // Without a crossing each triangle lies on one side of the skin (the two
     // vanes may lie on different sides, meeting it along the shaft): its
-    // first corner clearly off the skin tells which.
-    crosses
-        || part
-            .iter()
-            .any(|t| t.iter().find_map(|&p| side_of_skin(body, p, shape.length, ids)).is_some_and(|under| under))
+    // first corner clearly off the skin tells which. The triangles of one
+    // clipped vane share their first corner, so each distinct corner is
+    // judged once.
+    if crosses {
+        return true;
+    }
+    let mut judged: [(Vec3, Option<bool>); 12] = [(Vec3::NAN, None); 12];
+    let mut count = 0;
+    let mut side = |p: Vec3| {
+        if let Some(&(_, s)) =
+            judged[..count].iter().find(|(q, _)| q.to_array().map(f32::to_bits) == p.to_array().map(f32::to_bits))
+        {
+            return s;
+        }
+        let s = side_of_skin(body, p, shape.length, ids);
+        if count < judged.len() {
+            judged[count] = (p, s);
+            count += 1;
+        }
+        s
+    };
+    part.iter().any(|t| t.iter().find_map(|&p| side(p)).is_some_and(|under| under))
 }
 
-/// Whether two feathers' triangles intersect (the exact test of
-/// [`intersecting_pairs`], bounding boxes first).
-pub(crate) fn feathers_intersect(a: &[[Vec3; 3]; 2], b: &[[Vec3; 3]; 2]) -> bool {
-    let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
-    a.iter().any(|ta| {
-        let box_a = Aabb::of_triangle(ta);
-        !box_a.is_point()
-            && b.iter()
-                .zip(&boxes_b)
-                .any(|(tb, box_b)| !box_b.is_point() && box_a.overlaps(box_b) && triangles_intersect(ta, tb))
-    })
+/// A feather's two triangles with their bounding boxes, for testing one
+/// feather against many with [`FeatherBoxes::intersects`].
+pub(crate) struct FeatherBoxes {
+    prepared: [Prepared; 2],
+    boxes: [Aabb; 2],
+    whole: Aabb,
+}
+
+impl FeatherBoxes {
+    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
+        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
+        let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
+        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]) }
+    }
+
+    /// Whether these triangles intersect `b`'s (the exact test of
+    /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
+    /// feathers, then of each pair of triangles).
+    pub(crate) fn intersects(&self, b: &[[Vec3; 3]; 2]) -> bool {
+        let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
+        if !self.whole.overlaps(&boxes_b[0].union(&boxes_b[1])) {
+            return false;
+        }
+        let mut prepared_b: [Option<Prepared>; 2] = [None; 2];
+        self.prepared.iter().zip(&self.boxes).any(|(ta, box_a)| {
+            !box_a.is_point()
+                && b.iter().zip(&boxes_b).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
+                    !box_b.is_point()
+                        && box_a.overlaps(box_b)
+                        && prepared_intersect(ta, pb.get_or_insert_with(|| Prepared::of(tb)))
+                })
+        })
+    }
 }
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,
