@@ -94,6 +94,7 @@ impl Scene {
             gamma: config.gamma,
             lambda: config.lambda,
             theta_s: config.theta_s,
+            drift_tolerance: config.drift_tolerance,
             recompute_neighbourhoods: config.recompute_neighbourhoods,
         };
         let mut coat = Coat::default();
