@@ -22,7 +22,6 @@ use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::field::Fields;
 use plumage::geometry::RootFrame;
 use plumage::mesh::{MeshInput, weld};
-use plumage::ordering::NeighbourParams;
 use plumage::progress::Progress;
 use plumage::rng::Rng;
 use plumage::sampling::sample_roots_with_progress;
@@ -80,23 +79,7 @@ impl Scene {
         let surface = Surface::new(&mesh);
         let fields = Fields::new(&mesh, &surface, None, None, None, None, &config).ok()?;
         let sampling = sample_roots_with_progress(&mesh, &surface, &fields, &config, &Progress::none()).ok()?;
-        let shapes = Dressing::shapes_for(&sampling.roots, &config);
-        let dressing = Dressing {
-            surface,
-            triangles: mesh.triangles.clone(),
-            source_triangle: mesh.source_triangle.clone(),
-            reach: shapes.iter().map(|s| s.length).collect(),
-            shapes,
-            roots: sampling.roots,
-            neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
-            adjust_params: AdjustParams::from_config(&config),
-            mode: config.mode,
-            gamma: config.gamma,
-            lambda: config.lambda,
-            theta_s: config.theta_s,
-            drift_tolerance: config.drift_tolerance,
-            recompute_neighbourhoods: config.recompute_neighbourhoods,
-        };
+        let dressing = Dressing::new(surface, &mesh, sampling.roots, &config);
         let mut coat = Coat::default();
         coat.solve(&dressing, &mesh.positions, &mut Workspace::default(), &Progress::none()).ok()?;
         let (offsets, candidates) = coat.neighbourhoods.obstacle_csr();

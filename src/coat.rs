@@ -11,6 +11,7 @@ use crate::error::Result;
 use crate::error::{Error, ErrorKind};
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
+use crate::mesh::WeldedMesh;
 use crate::ordering::{NeighbourParams, Neighbourhoods, Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
 use crate::roots::{RootBinding, RootNormal, pose_roots};
@@ -56,6 +57,29 @@ pub struct Dressing {
 }
 
 impl Dressing {
+    /// Everything fixed at creation: the welded mesh's surface and
+    /// triangles, the sampled roots with their shapes, and the parameters
+    /// of `config`.
+    pub fn new(surface: Surface, mesh: &WeldedMesh, roots: Vec<RootBinding>, config: &Config) -> Self {
+        let shapes = Self::shapes_for(&roots, config);
+        Self {
+            surface,
+            triangles: mesh.triangles.clone(),
+            source_triangle: mesh.source_triangle.clone(),
+            reach: shapes.iter().map(|s| s.length).collect(),
+            shapes,
+            roots,
+            neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
+            adjust_params: AdjustParams::from_config(config),
+            mode: config.mode,
+            gamma: config.gamma,
+            lambda: config.lambda,
+            theta_s: config.theta_s,
+            drift_tolerance: config.drift_tolerance,
+            recompute_neighbourhoods: config.recompute_neighbourhoods,
+        }
+    }
+
     /// Shapes from the configuration and each root's local spacing and
     /// per-vertex multipliers: the global overrides of `config` when set,
     /// otherwise the spacing rules of [`FeatherShape::for_spacing`]; length

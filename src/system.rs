@@ -2,7 +2,6 @@
 //! feathers' rest binding (the dressing) and their state at the current pose
 //! (the coat), and is what the FFI handle wraps.
 
-use crate::adjustment::AdjustParams;
 use crate::animation::step::{StepWorkspace, step_coat};
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::config::SamplerKind;
@@ -11,7 +10,6 @@ use crate::error::Result;
 use crate::error::{Error, ErrorKind};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
-use crate::ordering::NeighbourParams;
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
 use crate::rng::hash64;
@@ -75,23 +73,7 @@ impl System {
         progress.check(Phase::Sampling, 0.0)?;
         let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
         progress.check(Phase::Sampling, 1.0)?;
-        let shapes = Dressing::shapes_for(&sampling.roots, config);
-        let dressing = Dressing {
-            surface,
-            triangles: welded.triangles.clone(),
-            source_triangle: welded.source_triangle.clone(),
-            reach: shapes.iter().map(|s| s.length).collect(),
-            shapes,
-            roots: sampling.roots,
-            neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
-            adjust_params: AdjustParams::from_config(config),
-            mode: config.mode,
-            gamma: config.gamma,
-            lambda: config.lambda,
-            theta_s: config.theta_s,
-            drift_tolerance: config.drift_tolerance,
-            recompute_neighbourhoods: config.recompute_neighbourhoods,
-        };
+        let dressing = Dressing::new(surface, &welded, sampling.roots, config);
         let sampling_report = SamplingReport {
             roots: dressing.len(),
             spacing: sampling.spacing,
