@@ -7,7 +7,6 @@
 //! the static adjustment.
 
 #[path = "../tests/common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
