@@ -634,12 +634,18 @@ const char *plumage_status_name(uint32_t status);
 
 /**
  * Fills `cfg` with the defaults and sets `struct_size`. NULL is ignored.
+ *
+ * # Safety
+ * `cfg` is NULL or points to writable memory for one `PlumageConfig`.
  */
 void plumage_config_init(struct PlumageConfig *cfg);
 
 /**
  * Sets every pointer of `mesh` to NULL, every count to 0 and sets
  * `struct_size`. NULL is ignored.
+ *
+ * # Safety
+ * `mesh` is NULL or points to writable memory for one `PlumageMeshDesc`.
  */
 void plumage_mesh_desc_init(struct PlumageMeshDesc *mesh);
 
@@ -648,6 +654,12 @@ void plumage_mesh_desc_init(struct PlumageMeshDesc *mesh);
  * On success `*out` receives the new system; on any error `*out` is set to
  * NULL (when `out` is not NULL) and the message is available from
  * `plumage_system_last_error(NULL, ...)` on the same thread.
+ *
+ * # Safety
+ * `cfg` is NULL or points to a `PlumageConfig` whose `struct_size` bytes are
+ * readable; `rest` is NULL or points to a `PlumageMeshDesc` whose arrays hold
+ * the counts it states; `out` is NULL or points to writable memory for one
+ * pointer. Nothing is kept after the call returns.
  */
 uint32_t plumage_system_create(const struct PlumageConfig *cfg,
                                const struct PlumageMeshDesc *rest,
@@ -656,6 +668,10 @@ uint32_t plumage_system_create(const struct PlumageConfig *cfg,
 /**
  * Frees a system and everything it owns. NULL is a no-op. Works on a
  * poisoned system too.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`, not used again
+ * afterwards and not in use by another thread.
  */
 void plumage_system_destroy(struct PlumageSystem *sys);
 
@@ -663,6 +679,11 @@ void plumage_system_destroy(struct PlumageSystem *sys);
  * Advances the animation by one frame: `positions` holds xyz for each of
  * the rest mesh's `vertex_count` vertices, in the caller's numbering. On
  * any error the system is exactly as before the call.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create` that no other
+ * thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+ * readable floats.
  */
 uint32_t plumage_system_step(struct PlumageSystem *sys,
                              const float *positions,
@@ -671,6 +692,11 @@ uint32_t plumage_system_step(struct PlumageSystem *sys,
 /**
  * Solves the pose given by `positions` from scratch, independent of the
  * frames stepped before. On any error the system is exactly as before.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create` that no other
+ * thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+ * readable floats.
  */
 uint32_t plumage_system_evaluate(struct PlumageSystem *sys,
                                  const float *positions,
@@ -678,12 +704,22 @@ uint32_t plumage_system_evaluate(struct PlumageSystem *sys,
 
 /**
  * Writes the number of feathers to `*out`.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a writable `size_t`.
  */
 uint32_t plumage_system_feather_count(const struct PlumageSystem *sys, size_t *out);
 
 /**
  * Writes the number of vertices every frame must provide (the rest mesh's
  * count, in the caller's numbering) to `*out`.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a writable `size_t`.
  */
 uint32_t plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *out);
 
@@ -691,6 +727,12 @@ uint32_t plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *ou
  * Copies one `PlumageFeather` per feather into `buf` (`capacity` elements).
  * `*out_len` receives the feather count; a NULL or too small `buf` gives
  * PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `buf` is NULL
+ * or holds `capacity` writable elements; `out_len` is NULL or points to a
+ * writable `size_t`.
  */
 uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
                                  struct PlumageFeather *buf,
@@ -705,6 +747,12 @@ uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
  * tip), where "left" lies on the binormal side (normal × shaft); both
  * triangles face away from the skin, and the root and tip corners of the
  * two triangles are bit-identical, so a host can share them.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `xyz` is NULL
+ * or holds `capacity` writable floats; `out_len` is NULL or points to a
+ * writable `size_t`.
  */
 uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
                                           float *xyz,
@@ -714,12 +762,24 @@ uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
 /**
  * Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
  * no roots have been planted.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
  */
 uint32_t plumage_system_sampling_stats(const struct PlumageSystem *sys,
                                        struct PlumageSamplingStats *out);
 
 /**
  * Static ordering figures. PLUMAGE_STATUS_NOT_AVAILABLE before any order exists.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
  */
 uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
                                        struct PlumageOrderingStats *out);
@@ -727,6 +787,12 @@ uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
 /**
  * What the last successful create, step or evaluate did.
  * PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
  */
 uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct PlumageFrameStats *out);
 
@@ -734,6 +800,12 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
  * Runs the exact validation (triangle–triangle intersections, body
  * penetrations, coverage, mean pitch) on the current feathers. Only reads
  * the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
  */
 uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct PlumageValidation *out);
 
@@ -748,6 +820,12 @@ uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct Plumage
  * and checksummed, and only a system created from the same mesh,
  * per-vertex attributes and configuration accepts it (the thread count
  * may differ).
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `buf` is NULL
+ * or holds `capacity` writable bytes; `out_len` is NULL or points to a
+ * writable `size_t`.
  */
 uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
                                    uint8_t *buf,
@@ -763,6 +841,10 @@ uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
  * roots or configuration, or of another format version) gives
  * PLUMAGE_STATUS_INVALID_STATE. On any error the system is exactly as it
  * was. The blob is only read during the call.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create` that no other
+ * thread uses during the call. `blob` is NULL or holds `len` readable bytes.
  */
 uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blob, size_t len);
 
@@ -773,6 +855,10 @@ uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blo
  * With `sys == NULL`, reports the last failure on the calling thread of a
  * call that had no usable system (a refused create, a NULL system). An
  * empty string means no failure was recorded.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; `buf` is NULL
+ * or holds `capacity` writable bytes.
  */
 size_t plumage_system_last_error(const struct PlumageSystem *sys, char *buf, size_t capacity);
 
@@ -781,6 +867,10 @@ size_t plumage_system_last_error(const struct PlumageSystem *sys, char *buf, siz
  * Test builds only (cargo feature `test-hooks`): makes the next step,
  * evaluate or validate on `sys` panic inside the library, to prove the
  * panic boundary. Returns PLUMAGE_STATUS_OK when armed.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create` that no other
+ * thread uses during the call.
  */
 uint32_t plumage_testing_panic_on_next_call(struct PlumageSystem *sys);
 #endif
@@ -788,6 +878,10 @@ uint32_t plumage_testing_panic_on_next_call(struct PlumageSystem *sys);
 #if defined(PLUMAGE_TEST_HOOKS)
 /**
  * Test builds only (cargo feature `test-hooks`): 1 when `sys` is poisoned, 0 when not.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call.
  */
 uint32_t plumage_testing_is_poisoned(const struct PlumageSystem *sys);
 #endif

@@ -51,7 +51,7 @@ fn system_error(sys: *const PlumageSystem) -> String {
 
 /// Creates with `d`, expecting `status`; checks `*out` stays NULL and a message exists.
 fn expect_refused(cfg: *const PlumageConfig, d: *const PlumageMeshDesc, status: u32) {
-    let mut out: *mut PlumageSystem = 0x1 as *mut PlumageSystem;
+    let mut out: *mut PlumageSystem = std::ptr::dangling_mut::<PlumageSystem>();
     let got = unsafe { plumage_system_create(cfg, d, &mut out) };
     assert_eq!(got, status, "status {} ({}), message: {}", got, name(got), thread_error());
     assert!(out.is_null(), "*out must be NULL after a refusal");

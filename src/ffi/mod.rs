@@ -42,6 +42,9 @@ pub extern "C" fn plumage_status_name(status: u32) -> *const c_char {
 }
 
 /// Fills `cfg` with the defaults and sets `struct_size`. NULL is ignored.
+///
+/// # Safety
+/// `cfg` is NULL or points to writable memory for one `PlumageConfig`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
     if cfg.is_null() {
@@ -53,6 +56,9 @@ pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
 
 /// Sets every pointer of `mesh` to NULL, every count to 0 and sets
 /// `struct_size`. NULL is ignored.
+///
+/// # Safety
+/// `mesh` is NULL or points to writable memory for one `PlumageMeshDesc`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_mesh_desc_init(mesh: *mut PlumageMeshDesc) {
     if mesh.is_null() {
@@ -66,6 +72,12 @@ pub unsafe extern "C" fn plumage_mesh_desc_init(mesh: *mut PlumageMeshDesc) {
 /// On success `*out` receives the new system; on any error `*out` is set to
 /// NULL (when `out` is not NULL) and the message is available from
 /// `plumage_system_last_error(NULL, ...)` on the same thread.
+///
+/// # Safety
+/// `cfg` is NULL or points to a `PlumageConfig` whose `struct_size` bytes are
+/// readable; `rest` is NULL or points to a `PlumageMeshDesc` whose arrays hold
+/// the counts it states; `out` is NULL or points to writable memory for one
+/// pointer. Nothing is kept after the call returns.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_create(
     cfg: *const PlumageConfig,
@@ -95,6 +107,10 @@ pub unsafe extern "C" fn plumage_system_create(
 
 /// Frees a system and everything it owns. NULL is a no-op. Works on a
 /// poisoned system too.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`, not used again
+/// afterwards and not in use by another thread.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
     if sys.is_null() {
@@ -109,6 +125,11 @@ pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
 /// Advances the animation by one frame: `positions` holds xyz for each of
 /// the rest mesh's `vertex_count` vertices, in the caller's numbering. On
 /// any error the system is exactly as before the call.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+/// readable floats.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_step(
     sys: *mut PlumageSystem,
@@ -125,6 +146,11 @@ pub unsafe extern "C" fn plumage_system_step(
 
 /// Solves the pose given by `positions` from scratch, independent of the
 /// frames stepped before. On any error the system is exactly as before.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+/// readable floats.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_evaluate(
     sys: *mut PlumageSystem,
@@ -140,6 +166,11 @@ pub unsafe extern "C" fn plumage_system_evaluate(
 }
 
 /// Writes the number of feathers to `*out`.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a writable `size_t`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
     with_system_ref(sys, |system| {
@@ -154,6 +185,11 @@ pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem,
 
 /// Writes the number of vertices every frame must provide (the rest mesh's
 /// count, in the caller's numbering) to `*out`.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a writable `size_t`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_vertex_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
     with_system_ref(sys, |system| {
@@ -169,6 +205,12 @@ pub unsafe extern "C" fn plumage_system_vertex_count(sys: *const PlumageSystem, 
 /// Copies one `PlumageFeather` per feather into `buf` (`capacity` elements).
 /// `*out_len` receives the feather count; a NULL or too small `buf` gives
 /// PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `buf` is NULL
+/// or holds `capacity` writable elements; `out_len` is NULL or points to a
+/// writable `size_t`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_feathers(
     sys: *const PlumageSystem,
@@ -189,6 +231,12 @@ pub unsafe extern "C" fn plumage_system_feathers(
 /// tip), where "left" lies on the binormal side (normal × shaft); both
 /// triangles face away from the skin, and the root and tip corners of the
 /// two triangles are bit-identical, so a host can share them.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `xyz` is NULL
+/// or holds `capacity` writable floats; `out_len` is NULL or points to a
+/// writable `size_t`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_feather_triangles(
     sys: *const PlumageSystem,
@@ -206,6 +254,12 @@ pub unsafe extern "C" fn plumage_system_feather_triangles(
 
 /// Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
 /// no roots have been planted.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_sampling_stats(
     sys: *const PlumageSystem,
@@ -231,6 +285,12 @@ pub unsafe extern "C" fn plumage_system_sampling_stats(
 }
 
 /// Static ordering figures. PLUMAGE_STATUS_NOT_AVAILABLE before any order exists.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_ordering_stats(
     sys: *const PlumageSystem,
@@ -257,6 +317,12 @@ pub unsafe extern "C" fn plumage_system_ordering_stats(
 
 /// What the last successful create, step or evaluate did.
 /// PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, out: *mut PlumageFrameStats) -> u32 {
     with_system_ref(sys, |system| {
@@ -292,6 +358,12 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
 /// Runs the exact validation (triangle–triangle intersections, body
 /// penetrations, coverage, mean pitch) on the current feathers. Only reads
 /// the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out: *mut PlumageValidation) -> u32 {
     with_system_ref(sys, |system| {
@@ -322,6 +394,12 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
 /// and checksummed, and only a system created from the same mesh,
 /// per-vertex attributes and configuration accepts it (the thread count
 /// may differ).
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `buf` is NULL
+/// or holds `capacity` writable bytes; `out_len` is NULL or points to a
+/// writable `size_t`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_save_state(
     sys: *const PlumageSystem,
@@ -340,6 +418,10 @@ pub unsafe extern "C" fn plumage_system_save_state(
 /// roots or configuration, or of another format version) gives
 /// PLUMAGE_STATUS_INVALID_STATE. On any error the system is exactly as it
 /// was. The blob is only read during the call.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `blob` is NULL or holds `len` readable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_load_state(sys: *mut PlumageSystem, blob: *const u8, len: usize) -> u32 {
     with_system(sys, |system, _| {
@@ -366,6 +448,10 @@ fn not_available(what: &str) -> Failure {
 /// With `sys == NULL`, reports the last failure on the calling thread of a
 /// call that had no usable system (a refused create, a NULL system). An
 /// empty string means no failure was recorded.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; `buf` is NULL
+/// or holds `capacity` writable bytes.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_last_error(
     sys: *const PlumageSystem,
@@ -406,6 +492,10 @@ unsafe fn frame_positions<'a>(positions: *const f32, vertex_count: usize) -> Res
 /// Test builds only (cargo feature `test-hooks`): makes the next step,
 /// evaluate or validate on `sys` panic inside the library, to prove the
 /// panic boundary. Returns PLUMAGE_STATUS_OK when armed.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call.
 #[cfg(feature = "test-hooks")]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_testing_panic_on_next_call(sys: *mut PlumageSystem) -> u32 {
@@ -416,6 +506,10 @@ pub unsafe extern "C" fn plumage_testing_panic_on_next_call(sys: *mut PlumageSys
 }
 
 /// Test builds only (cargo feature `test-hooks`): 1 when `sys` is poisoned, 0 when not.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call.
 #[cfg(feature = "test-hooks")]
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_testing_is_poisoned(sys: *const PlumageSystem) -> u32 {

@@ -236,7 +236,7 @@ impl PlumageConfig {
         }
     }
 
-    pub(crate) fn to_config(&self) -> Result<Config, Failure> {
+    pub(crate) fn to_config(self) -> Result<Config, Failure> {
         let invalid = |m: String| Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, m);
         let sampler = match self.sampler {
             PLUMAGE_SAMPLER_GUIDED => SamplerKind::Guided,

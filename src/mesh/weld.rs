@@ -129,6 +129,8 @@ pub fn weld(mesh: &MeshInput<'_>) -> Result<WeldedMesh> {
 }
 
 /// Zero area, or thinner than f32 can resolve relative to its longest edge.
+/// The negated comparisons are deliberate: a NaN length or area is degenerate.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn is_degenerate(a: Vec3, b: Vec3, c: Vec3) -> bool {
     let longest2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
     if !(longest2 > 0.0) || !longest2.is_finite() {
