@@ -46,6 +46,8 @@ PlumageConfig make_config(const Options& opt) {
     }
     if (opt.mode) cfg.mode = *opt.mode;
     if (opt.drift_tolerance_deg) cfg.drift_tolerance = static_cast<float>(*opt.drift_tolerance_deg * kPi / 180.0);
+    if (opt.curvature_min_scale) cfg.curvature_min_scale = *opt.curvature_min_scale;
+    if (opt.fluffiness_deg) cfg.fluffiness = static_cast<float>(*opt.fluffiness_deg * kPi / 180.0);
     if (opt.threads) cfg.threads = *opt.threads;
     return cfg;
 }

@@ -84,7 +84,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
-                                           "--model-resolution", "--drift-tolerance"};
+                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -129,6 +129,9 @@ std::string usage_text() {
            "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
            "  --drift-tolerance DEG   incremental: how far a feather may drift before it is readjusted (default 17.2;\n"
            "                       every moved feather is checked exactly each frame); at most 2.86 (theta_s) = the paper's rule\n"
+           "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
+           "                       (default 0.4; 1 = uniform spacing)\n"
+           "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
            "  --report FILE.json   write the machine-readable report\n"
@@ -182,6 +185,8 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--mode") {
             o.mode = parse_choice(arg, value, {"incremental", "legacy", "rebuild"}, {PLUMAGE_MODE_INCREMENTAL, PLUMAGE_MODE_LEGACY, PLUMAGE_MODE_REBUILD});
         } else if (arg == "--drift-tolerance") o.drift_tolerance_deg = parse_float(arg, value);
+        else if (arg == "--curvature-min-scale") o.curvature_min_scale = parse_float(arg, value);
+        else if (arg == "--fluffiness") o.fluffiness_deg = parse_float(arg, value);
         else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--validate") {
             const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});

@@ -27,6 +27,8 @@ struct Options {
     std::optional<std::array<float, 3>> flow_source;
     std::optional<uint32_t> mode;
     std::optional<float> drift_tolerance_deg;
+    std::optional<float> curvature_min_scale;
+    std::optional<float> fluffiness_deg;
     std::optional<uint32_t> threads;
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;

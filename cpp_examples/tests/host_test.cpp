@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -223,6 +224,17 @@ int model_resolution() {
     return 0;
 }
 
+// Library settings given on the command line reach the library (the report
+// echoes the configuration the system was created with).
+int settings() {
+    const json r = dress("settings", {"--frames", "1", "--curvature-min-scale", "1", "--fluffiness", "10", "--drift-tolerance", "2"}, 1);
+    const json& c = r["config"];
+    CHECK(c.value("curvature_min_scale", 0.0) == 1.0);
+    CHECK(std::fabs(c.value("fluffiness", 0.0) - 10.0 * 3.14159265358979 / 180.0) < 1e-5);
+    CHECK(std::fabs(c.value("drift_tolerance", 0.0) - 2.0 * 3.14159265358979 / 180.0) < 1e-5);
+    return 0;
+}
+
 int rest_only() {
     const json r = dress("rest", {"--frames", "0"}, 0);
     CHECK(r["config"].value("frames", 99) == 0);
@@ -334,6 +346,7 @@ int unknown_mesh_in_file() {
 int library_error() {
     // The host passes parameters through; the library refuses out-of-range ones.
     EXPECT_REFUSAL(run_host({"--threads", "5000", "--frames", "1"}), 4, "INVALID_ARGUMENT");
+    EXPECT_REFUSAL(run_host({"--curvature-min-scale", "0", "--frames", "1"}), 4, "curvature_min_scale");
     return 0;
 }
 
@@ -346,6 +359,7 @@ int help() {
 const std::map<std::string, std::function<int()>> kScenarios = {
     {"builtin", builtin},
     {"rest_only", rest_only},
+    {"settings", settings},
     {"model_resolution", model_resolution},
     {"flamingo", [] { return model("Flamingo.glb", "Mesh_0", 715); }},
     {"fox", [] { return model("Fox.glb", "Mesh", 1728); }},
