@@ -1,6 +1,6 @@
 //! The C ABI. Every `extern "C"` function of Plumage is here and nowhere
 //! else; each checks its pointers, then runs behind the panic boundary of
-//! [`boundary`]. No algorithm lives in this module.
+//! `boundary`. No algorithm lives in this module.
 
 mod boundary;
 mod status;
