@@ -220,14 +220,26 @@ impl HeightField {
         for i in 0..self.u {
             let x = (i as f32 + 0.5) * self.dx;
             self.col_x[i] = x;
-            self.col_near[i] = (x - 0.5 * self.dx).max(JUDGE_FRACTION * l);
             self.col_far[i] = x + 0.5 * self.dx;
-            self.inv_near[i] = 1.0 / self.col_near[i];
             self.inv_far[i] = 1.0 / self.col_far[i];
         }
+        self.set_judge_fraction(JUDGE_FRACTION, l);
         self.first_col = (0..self.u).find(|&i| self.col_far[i] > self.socket_x).unwrap_or(self.u);
         for (j, y) in self.row_y.iter_mut().enumerate() {
             *y = self.y_min + (j as f32 + 0.5) * self.dy;
+        }
+    }
+
+    /// Judges the heights nearer the root than `fraction` of `length` (the
+    /// length the grid was laid for) at that distance (see
+    /// [`JUDGE_FRACTION`]): sets each column's near edge (and its
+    /// reciprocal) for the steps. Reads only the grid, so the same filled
+    /// field can be judged at several fractions.
+    pub(crate) fn set_judge_fraction(&mut self, fraction: f32, length: f32) {
+        let judged = fraction * length;
+        for i in 0..self.u {
+            self.col_near[i] = (self.col_x[i] - 0.5 * self.dx).max(judged);
+            self.inv_near[i] = 1.0 / self.col_near[i];
         }
     }
 
