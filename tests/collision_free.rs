@@ -5,10 +5,11 @@
 //!
 //! Intersecting pairs and body penetrations must be exactly 0. Coverage is
 //! asserted a little below the level reached today; the issue's target is
-//! 0.95, met by the sphere (0.987), the torus (0.981) and the Fox (0.959),
-//! not yet by the Flamingo (0.875) or the bird (0.853). What is left bare
+//! 0.95, met by the sphere (0.987), the torus (0.989) and the Fox (0.961),
+//! not yet by the Flamingo (0.891) or the bird (0.871). What is left bare
 //! there: the rims of thin wings and the thin legs (a flat feather over a
-//! wing lies parallel to the rim's normal), feathers pitched up on thin
+//! wing lies parallel to the rim's normal, and the probes' rays there leave
+//! the coat between the two skins' feathers), feathers pitched up on thin
 //! limbs and at wing roots, and feathers shortened in creases.
 
 mod common;
@@ -99,7 +100,7 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
     let (shape, hints) = torus(10.0, 3.0, 120, 40);
     let config = Config { target_feathers: 4000, threads: 2, ..Config::default() };
     let (system, v) = dress(&shape, Some(&hints), &config);
-    assert_collision_free("torus", &system, &v, 0.975);
+    assert_collision_free("torus", &system, &v, 0.985);
 }
 
 /// The three shared models at the sizes of the issue, each with its flow
@@ -107,9 +108,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
 #[test]
 fn shared_models_at_rest_are_collision_free() {
     let models = [
-        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.87),
+        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.885),
         ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.955),
-        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.85),
+        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.865),
     ];
     for (file, feathers, head, min_coverage) in models {
         let Some(shape) = load_model(file) else { continue };

@@ -119,6 +119,10 @@ pub struct HeightField {
     pub(crate) socket_x: f32,
     /// Skin below this height cannot bind any allowed pitch.
     pub(crate) body_floor: f32,
+    /// `JUDGE_FRACTION` of the length the grid was laid for: the body's
+    /// clearance angle is always taken from this distance on (see
+    /// `combine_heights`), whatever distance the steps judge at.
+    pub(crate) clearance_from: f32,
     pub(crate) shape: FeatherShape,
     /// Obstacle tops per cell, `j·u + i` (row j across, column i along).
     pub(crate) obstacle: Vec<f32>,
@@ -158,6 +162,7 @@ impl HeightField {
             floor: -1.0,
             socket_x: 0.0,
             body_floor: -1.0,
+            clearance_from: 0.0,
             shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5 },
             obstacle: Vec::new(),
             body: Vec::new(),
@@ -223,6 +228,7 @@ impl HeightField {
             self.col_far[i] = x + 0.5 * self.dx;
             self.inv_far[i] = 1.0 / self.col_far[i];
         }
+        self.clearance_from = JUDGE_FRACTION * l;
         self.set_judge_fraction(JUDGE_FRACTION, l);
         self.first_col = (0..self.u).find(|&i| self.col_far[i] > self.socket_x).unwrap_or(self.u);
         for (j, y) in self.row_y.iter_mut().enumerate() {
