@@ -5,11 +5,12 @@
 //!
 //! Intersecting pairs and body penetrations must be exactly 0. Coverage is
 //! asserted a little below the level reached today; the issue's target is
-//! 0.95, met by the sphere (0.987) and the torus (0.954), nearly by the Fox
-//! (0.949), not yet by the Flamingo (0.83) or the bird (0.83). What is left
-//! bare there: the rims of thin wings (a flat feather over a wing lies
-//! parallel to the rim's normal), feathers pitched up on thin limbs and at
-//! wing roots, and feathers shortened or left out in creases.
+//! 0.95, met by the sphere (0.987), the torus (0.989) and the Fox (0.961),
+//! not yet by the Flamingo (0.891) or the bird (0.871). What is left bare
+//! there: the rims of thin wings and the thin legs (a flat feather over a
+//! wing lies parallel to the rim's normal, and the probes' rays there leave
+//! the coat between the two skins' feathers), feathers pitched up on thin
+//! limbs and at wing roots, and feathers shortened in creases.
 
 mod common;
 
@@ -99,7 +100,7 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
     let (shape, hints) = torus(10.0, 3.0, 120, 40);
     let config = Config { target_feathers: 4000, threads: 2, ..Config::default() };
     let (system, v) = dress(&shape, Some(&hints), &config);
-    assert_collision_free("torus", &system, &v, 0.95);
+    assert_collision_free("torus", &system, &v, 0.985);
 }
 
 /// The three shared models at the sizes of the issue, each with its flow
@@ -107,9 +108,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
 #[test]
 fn shared_models_at_rest_are_collision_free() {
     let models = [
-        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.82),
-        ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.94),
-        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.81),
+        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.885),
+        ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.955),
+        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.865),
     ];
     for (file, feathers, head, min_coverage) in models {
         let Some(shape) = load_model(file) else { continue };

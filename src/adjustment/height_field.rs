@@ -119,6 +119,10 @@ pub struct HeightField {
     pub(crate) socket_x: f32,
     /// Skin below this height cannot bind any allowed pitch.
     pub(crate) body_floor: f32,
+    /// `JUDGE_FRACTION` of the length the grid was laid for: the body's
+    /// clearance angle is always taken from this distance on (see
+    /// `combine_heights`), whatever distance the steps judge at.
+    pub(crate) clearance_from: f32,
     pub(crate) shape: FeatherShape,
     /// Obstacle tops per cell, `j·u + i` (row j across, column i along).
     pub(crate) obstacle: Vec<f32>,
@@ -158,6 +162,7 @@ impl HeightField {
             floor: -1.0,
             socket_x: 0.0,
             body_floor: -1.0,
+            clearance_from: 0.0,
             shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5 },
             obstacle: Vec::new(),
             body: Vec::new(),
@@ -220,14 +225,27 @@ impl HeightField {
         for i in 0..self.u {
             let x = (i as f32 + 0.5) * self.dx;
             self.col_x[i] = x;
-            self.col_near[i] = (x - 0.5 * self.dx).max(JUDGE_FRACTION * l);
             self.col_far[i] = x + 0.5 * self.dx;
-            self.inv_near[i] = 1.0 / self.col_near[i];
             self.inv_far[i] = 1.0 / self.col_far[i];
         }
+        self.clearance_from = JUDGE_FRACTION * l;
+        self.set_judge_fraction(JUDGE_FRACTION, l);
         self.first_col = (0..self.u).find(|&i| self.col_far[i] > self.socket_x).unwrap_or(self.u);
         for (j, y) in self.row_y.iter_mut().enumerate() {
             *y = self.y_min + (j as f32 + 0.5) * self.dy;
+        }
+    }
+
+    /// Judges the heights nearer the root than `fraction` of `length` (the
+    /// length the grid was laid for) at that distance (see
+    /// [`JUDGE_FRACTION`]): sets each column's near edge (and its
+    /// reciprocal) for the steps. Reads only the grid, so the same filled
+    /// field can be judged at several fractions.
+    pub(crate) fn set_judge_fraction(&mut self, fraction: f32, length: f32) {
+        let judged = fraction * length;
+        for i in 0..self.u {
+            self.col_near[i] = (self.col_x[i] - 0.5 * self.dx).max(judged);
+            self.inv_near[i] = 1.0 / self.col_near[i];
         }
     }
 
