@@ -79,7 +79,11 @@ pub enum Selection<'a> {
     /// exactly at its current pose (the validation's tests against its
     /// obstacles, at their final poses, and the body) and adjusted when the
     /// check fails. A frame can then leave alone feathers whose
-    /// surroundings moved a little, without letting them intersect.
+    /// surroundings moved a little, without letting them intersect. Here
+    /// propagation passes on only what can leave a feather standing on
+    /// nothing: an obstacle that sank (pitch) or shrank (scale) by more
+    /// than `threshold`, or rolled by more than it either way; one that
+    /// rose or grew into a feather fails that feather's exact check.
     Verify {
         /// Feathers adjusted in any case.
         seeds: &'a [bool],
@@ -317,8 +321,16 @@ impl Adjuster {
                 let i = i as usize;
                 let old = poses[i];
                 if let Some(threshold) = selection.threshold() {
-                    self.moved[i] =
-                        (o.pose.pitch - old.pitch).abs() > threshold || (o.pose.roll - old.roll).abs() > threshold;
+                    let rolled = (o.pose.roll - old.roll).abs() > threshold;
+                    self.moved[i] = rolled
+                        || if matches!(selection, Selection::Verify { .. }) {
+                            // A feather that rose or grew is checked against
+                            // by what lies on it; only one that sank or
+                            // shrank can leave them standing on nothing.
+                            old.pitch - o.pose.pitch > threshold || old.scale - o.pose.scale > threshold
+                        } else {
+                            (o.pose.pitch - old.pitch).abs() > threshold
+                        };
                 }
                 self.changed[i] = o.pose != old;
                 poses[i] = o.pose;
