@@ -258,6 +258,53 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, false)
+    }
+
+    /// As [`Adjuster::adjust_in_order_until`], one feather after the other
+    /// in `order` on the calling thread, visiting only the feathers
+    /// selected and those an adjusted feather listed as a candidate changed
+    /// under. For a few seeds over long candidate rows, where the levels of
+    /// everything downstream would cost more than the adjustments. The
+    /// candidate relation must be symmetric (`j` in row `i` exactly when `i`
+    /// is in row `j`, as with the full obstacle candidates); the result is
+    /// then the same as with levels, bitwise: a feather reads only earlier
+    /// ones, final either way, and one that no earlier adjusted feather
+    /// changed under is left alone by both.
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_sparse_until(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, true)
+    }
+
+    /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
+    /// `sparse` (see [`Adjuster::adjust_sparse_until`]).
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn ordered_run(
+        &mut self,
+        (frames, shapes, order, rank, candidates): (&[RootFrame], &[FeatherShape], &[u32], &[u32], CandidateLists<'_>),
+        poses: &mut [FeatherPose],
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+        sparse: bool,
+    ) -> Option<AdjustStats> {
         let start = Instant::now();
         let n = frames.len();
         assert!(
@@ -275,8 +322,13 @@ impl Adjuster {
             Selection::All => {}
         }
         self.posed_triangles(frames, shapes, poses);
-        self.mark_scope(order, rank, candidates, selection);
-        let levels = self.assign_levels(order, rank, candidates);
+        let levels = if sparse {
+            self.mark_selected(n, selection);
+            0
+        } else {
+            self.mark_scope(order, rank, candidates, selection);
+            self.assign_levels(order, rank, candidates)
+        };
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
@@ -299,6 +351,32 @@ impl Adjuster {
 
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
         let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
+        if sparse {
+            for (k, &i) in order.iter().enumerate() {
+                if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
+                    return None;
+                }
+                let i = i as usize;
+                if !self.in_scope[i] {
+                    continue;
+                }
+                let marks = Marks { moved: &self.moved, changed: &self.changed };
+                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+                let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
+                self.apply(i, &visit, &inputs, poses, &mut stats);
+                if self.changed[i] {
+                    // What lies on it may now meet it or stand on nothing.
+                    for &j in candidates.of(i) {
+                        if rank[j as usize] > rank[i] {
+                            self.in_scope[j as usize] = true;
+                        }
+                    }
+                }
+            }
+            stats.levels = usize::from(stats.adjusted + stats.verified > 0);
+            stats.seconds = start.elapsed().as_secs_f64();
+            return Some(stats);
+        }
         for l in 0..levels {
             if !keep_going(l as f32 / levels.max(1) as f32) {
                 return None;
@@ -308,42 +386,70 @@ impl Adjuster {
             let marks = Marks { moved: &self.moved, changed: &self.changed };
             let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
             run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
-            for (&i, outcome) in items.iter().zip(outcomes.iter()) {
-                let o = match outcome {
-                    Visit::Adjusted(o) => o,
-                    Visit::Verified => {
-                        self.verified[i as usize] = true;
-                        stats.verified += 1;
-                        continue;
-                    }
-                    Visit::Skipped => continue,
-                };
-                let i = i as usize;
-                let old = poses[i];
-                if let Some(threshold) = selection.threshold() {
-                    let rolled = (o.pose.roll - old.roll).abs() > threshold;
-                    self.moved[i] = rolled
-                        || if matches!(selection, Selection::Verify { .. }) {
-                            // A feather that rose or grew is checked against
-                            // by what lies on it; only one that sank or
-                            // shrank can leave them standing on nothing.
-                            old.pitch - o.pose.pitch > threshold || old.scale - o.pose.scale > threshold
-                        } else {
-                            (o.pose.pitch - old.pitch).abs() > threshold
-                        };
-                }
-                self.changed[i] = o.pose != old;
-                poses[i] = o.pose;
-                self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
-                self.spheres[i] = bounding_sphere(&self.triangles[i]);
-                self.adjusted[i] = true;
-                stats.adjusted += 1;
-                stats.collision_tests += u64::from(o.collision_tests);
-                stats.clamped += usize::from(o.clamped);
+            let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
+            for k in 0..end - start {
+                let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
+                self.apply(i, &outcome, &inputs, poses, &mut stats);
             }
         }
         stats.seconds = start.elapsed().as_secs_f64();
         Some(stats)
+    }
+
+    /// Records what became of feather `i`; an adjusted feather takes its
+    /// new pose (and triangles) and is marked moved past the threshold or
+    /// changed at all.
+    fn apply(
+        &mut self,
+        i: usize,
+        visit: &Visit,
+        inputs: &Inputs<'_>,
+        poses: &mut [FeatherPose],
+        stats: &mut AdjustStats,
+    ) {
+        let (frames, shapes, selection) = (inputs.frames, inputs.shapes, inputs.selection);
+        let o = match visit {
+            Visit::Adjusted(o) => o,
+            Visit::Verified => {
+                self.verified[i] = true;
+                stats.verified += 1;
+                return;
+            }
+            Visit::Skipped => return,
+        };
+        let old = poses[i];
+        if let Some(threshold) = selection.threshold() {
+            let rolled = (o.pose.roll - old.roll).abs() > threshold;
+            self.moved[i] = rolled
+                || if matches!(selection, Selection::Verify { .. }) {
+                    // A feather that rose or grew is checked against
+                    // by what lies on it; only one that sank or
+                    // shrank can leave them standing on nothing.
+                    old.pitch - o.pose.pitch > threshold || old.scale - o.pose.scale > threshold
+                } else {
+                    (o.pose.pitch - old.pitch).abs() > threshold
+                };
+        }
+        self.changed[i] = o.pose != old;
+        poses[i] = o.pose;
+        self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+        self.spheres[i] = bounding_sphere(&self.triangles[i]);
+        self.adjusted[i] = true;
+        stats.adjusted += 1;
+        stats.collision_tests += u64::from(o.collision_tests);
+        stats.clamped += usize::from(o.clamped);
+    }
+
+    /// The scope of a sparse run to begin with: the selected feathers.
+    fn mark_selected(&mut self, n: usize, selection: Selection<'_>) {
+        self.in_scope.clear();
+        match selection {
+            Selection::All => self.in_scope.resize(n, true),
+            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => self.in_scope.extend_from_slice(s),
+            Selection::Verify { seeds, suspects, .. } => {
+                self.in_scope.extend(seeds.iter().zip(suspects).map(|(&s, &v)| s | v))
+            }
+        }
     }
 
     /// Every feather's triangles at its current pose, and their spheres.
@@ -586,4 +692,100 @@ pub fn adjust_in_order(
 ) -> AdjustStats {
     let selection = subset.map_or(Selection::All, Selection::Subset);
     Adjuster::new().adjust_in_order(frames, shapes, poses, order, rank, candidates, body, params, steps, selection)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ordering::{NeighbourParams, Neighbourhoods};
+    use crate::rng::Rng;
+
+    /// A sparse run gives the poses, adjusted and verified flags of a run
+    /// by levels over the same symmetric candidates.
+    #[test]
+    fn a_sparse_run_matches_the_levels() {
+        let mut rng = Rng::new(7);
+        let (w, h) = (14, 10);
+        let frames: Vec<RootFrame> = (0..w * h)
+            .map(|k| {
+                let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
+                let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
+                RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
+            })
+            .collect();
+        let n = frames.len();
+        let shapes = vec![FeatherShape::for_spacing(1.0); n];
+        let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
+        let mut nb = Neighbourhoods::new();
+        nb.rebuild(&frames, &reach, &NeighbourParams::default());
+        let (offsets, indices) = nb.obstacle_csr();
+        let candidates = CandidateLists::new(offsets, indices);
+        // Tips first: the feathers farther along x are earlier.
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
+        let mut rank = vec![0u32; n];
+        for (k, &i) in order.iter().enumerate() {
+            rank[i as usize] = k as u32;
+        }
+        let body = BodyIndex::from_mesh(
+            &[
+                Vec3::new(-5.0, -5.0, -0.05),
+                Vec3::new(25.0, -5.0, -0.05),
+                Vec3::new(25.0, 20.0, -0.05),
+                Vec3::new(-5.0, 20.0, -0.05),
+            ],
+            &[[0, 1, 2], [0, 2, 3]],
+        );
+        let params = AdjustParams::default();
+        let mut start = vec![FeatherPose::default(); n];
+        let mut adjuster = Adjuster::new();
+        let all = adjuster.adjust_in_order(
+            &frames,
+            &shapes,
+            &mut start,
+            &order,
+            &rank,
+            candidates,
+            &body,
+            &params,
+            AdjustSteps::Full,
+            Selection::All,
+        );
+        assert_eq!(all.adjusted, n);
+        let mut checked = 0;
+        for round in 0..6 {
+            // Disturb some poses, then readjust a few seeds and check others.
+            let mut poses = start.clone();
+            for p in poses.iter_mut() {
+                if rng.next_f32() < 0.15 {
+                    p.pitch += 0.8 * rng.next_f32() - 0.4;
+                    p.roll += 0.4 * rng.next_f32() - 0.2;
+                }
+            }
+            let seeds: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.03 + 0.04 * round as f32).collect();
+            let suspects: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.1).collect();
+            let threshold = 0.05 + 0.1 * round as f32;
+            for selection in [
+                Selection::Verify { seeds: &seeds, suspects: &suspects, threshold },
+                Selection::Propagate { seeds: &seeds, threshold },
+            ] {
+                let run = |sparse: bool| {
+                    let mut adjuster = Adjuster::new();
+                    let mut poses = poses.clone();
+                    let lists = (&frames[..], &shapes[..], &order[..], &rank[..], candidates);
+                    let stats = adjuster
+                        .ordered_run(lists, &mut poses, &body, &params, AdjustSteps::Full, selection, &|_| true, sparse)
+                        .unwrap();
+                    (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
+                };
+                let (by_levels, sparse) = (run(false), run(true));
+                checked += by_levels.3 + by_levels.4;
+                assert_eq!(by_levels.0, sparse.0, "round {round}");
+                assert_eq!(by_levels.1, sparse.1, "round {round}");
+                assert_eq!(by_levels.2, sparse.2, "round {round}");
+                assert_eq!((by_levels.3, by_levels.4), (sparse.3, sparse.4), "round {round}");
+            }
+        }
+        assert!(checked > n, "too little was adjusted or checked: {checked}");
+    }
 }

@@ -174,7 +174,7 @@ pub fn step_coat(
             step.verified.extend_from_slice(work.adjuster.verified());
             step.no_suspects.clear();
             step.no_suspects.resize(n, false);
-            let more = pass.run(
+            let more = pass.run_sparse(
                 &mut work.adjuster,
                 &mut coat.poses,
                 CandidateLists::new(offsets, indices),
@@ -219,6 +219,44 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
+    /// As [`Pass::run`] one feather after the other, visiting only the
+    /// seeds and what the feathers it adjusts change under (the few
+    /// feathers of the missed-contact pass over the full, symmetric
+    /// candidate lists; the same poses as by levels).
+    fn run_sparse(
+        &self,
+        adjuster: &mut Adjuster,
+        poses: &mut [FeatherPose],
+        candidates: CandidateLists<'_>,
+        seeds: &[bool],
+        suspects: Option<&[bool]>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let d = self.dressing;
+        adjuster.adjust_sparse_until(
+            self.frames,
+            &d.shapes,
+            poses,
+            self.order.order(),
+            self.order.ranks(),
+            candidates,
+            self.body,
+            &d.adjust_params,
+            self.steps,
+            self.selection(seeds, suspects),
+            keep_going,
+        )
+    }
+
+    /// Verifying with `suspects`, or propagating past θs.
+    fn selection<'s>(&self, seeds: &'s [bool], suspects: Option<&'s [bool]>) -> Selection<'s> {
+        let d = self.dressing;
+        match suspects {
+            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
+            None => Selection::Propagate { seeds, threshold: d.theta_s },
+        }
+    }
+
     /// Adjusts `seeds` in order, and past θs what lies on them, with
     /// `candidates` as obstacle lists.
     fn run(
@@ -231,10 +269,7 @@ impl Pass<'_> {
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
-        let selection = match suspects {
-            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
-            None => Selection::Propagate { seeds, threshold: d.theta_s },
-        };
+        let selection = self.selection(seeds, suspects);
         adjuster.adjust_in_order_until(
             self.frames,
             &d.shapes,
