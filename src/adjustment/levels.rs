@@ -14,6 +14,7 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
+use crate::validation::FeatherBoxes;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -259,7 +260,7 @@ impl Adjuster {
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let lists = (frames, shapes, order, rank, candidates);
-        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, false)
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (false, false))
     }
 
     /// As [`Adjuster::adjust_in_order_until`], one feather after the other
@@ -268,10 +269,14 @@ impl Adjuster {
     /// under. For a few seeds over long candidate rows, where the levels of
     /// everything downstream would cost more than the adjustments. The
     /// candidate relation must be symmetric (`j` in row `i` exactly when `i`
-    /// is in row `j`, as with the full obstacle candidates); the result is
-    /// then the same as with levels, bitwise: a feather reads only earlier
-    /// ones, final either way, and one that no earlier adjusted feather
-    /// changed under is left alone by both.
+    /// is in row `j`, as with the full obstacle candidates). Meant for a
+    /// second pass over a frame whose first pass has checked the feathers
+    /// against the body: verifying, it tests only the pairs (the body has
+    /// not moved since, and a feather whose pose changes is adjusted with
+    /// every check). Apart from that the result is the same as with
+    /// levels, bitwise: a feather reads only earlier ones, final either
+    /// way, and one that no earlier adjusted feather changed under is left
+    /// alone by both.
     #[allow(clippy::too_many_arguments)]
     pub fn adjust_sparse_until(
         &mut self,
@@ -288,11 +293,12 @@ impl Adjuster {
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let lists = (frames, shapes, order, rank, candidates);
-        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, true)
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (true, true))
     }
 
     /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
-    /// `sparse` (see [`Adjuster::adjust_sparse_until`]).
+    /// `sparse`, verifying with every check or the pairs only (see
+    /// [`Adjuster::adjust_sparse_until`]).
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn ordered_run(
         &mut self,
@@ -303,7 +309,7 @@ impl Adjuster {
         steps: AdjustSteps,
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
-        sparse: bool,
+        (sparse, pairs_only): (bool, bool),
     ) -> Option<AdjustStats> {
         let start = Instant::now();
         let n = frames.len();
@@ -350,7 +356,7 @@ impl Adjuster {
         self.verified.resize(n, false);
 
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
-        let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
+        let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only };
         if sparse {
             for (k, &i) in order.iter().enumerate() {
                 if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
@@ -572,6 +578,8 @@ struct Inputs<'a> {
     params: &'a AdjustParams,
     steps: AdjustSteps,
     selection: Selection<'a>,
+    /// Verification tests the pairs only (see [`Adjuster::adjust_sparse_until`]).
+    pairs_only: bool,
 }
 
 /// What became of one feather of a level.
@@ -635,18 +643,24 @@ fn adjust_one(
 ) -> Visit {
     let ri = inputs.rank[i];
     let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let mut verify = false;
     if let Some(seeds) = inputs.selection.seeds()
         && !seeds[i]
         && !earlier.clone().any(|j| marks.moved[j])
     {
         let Selection::Verify { suspects, .. } = inputs.selection else { return Visit::Skipped };
-        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j]) {
+        // A changed obstacle that cannot matter to i at any size and pose
+        // is left out of its checks anyway.
+        let matters = |j: usize| {
+            let (centre, radius) = posed.spheres[j];
+            reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+        };
+        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j] && matters(j)) {
             return Visit::Skipped;
         }
         verify = true;
     }
-    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacles.clear();
     worker.obstacles.extend(earlier.filter_map(|j| {
         let (centre, radius) = posed.spheres[j];
@@ -659,8 +673,17 @@ fn adjust_one(
         })
     }));
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
-    if verify && pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field) {
-        return Visit::Verified;
+    if verify {
+        let clear = if inputs.pairs_only {
+            let mine = feather_triangles(frame, shape, poses[i]);
+            let mine = FeatherBoxes::new(&mine);
+            !worker.obstacles.iter().any(|o| mine.intersects(&o.triangles))
+        } else {
+            pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field)
+        };
+        if clear {
+            return Visit::Verified;
+        }
     }
     Visit::Adjusted(adjust_feather(
         &inputs.frames[i],
@@ -769,21 +792,32 @@ mod tests {
                 Selection::Verify { seeds: &seeds, suspects: &suspects, threshold },
                 Selection::Propagate { seeds: &seeds, threshold },
             ] {
-                let run = |sparse: bool| {
+                let run = |sparse: bool, pairs_only: bool| {
                     let mut adjuster = Adjuster::new();
                     let mut poses = poses.clone();
                     let lists = (&frames[..], &shapes[..], &order[..], &rank[..], candidates);
                     let stats = adjuster
-                        .ordered_run(lists, &mut poses, &body, &params, AdjustSteps::Full, selection, &|_| true, sparse)
+                        .ordered_run(
+                            lists,
+                            &mut poses,
+                            &body,
+                            &params,
+                            AdjustSteps::Full,
+                            selection,
+                            &|_| true,
+                            (sparse, pairs_only),
+                        )
                         .unwrap();
                     (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
                 };
-                let (by_levels, sparse) = (run(false), run(true));
-                checked += by_levels.3 + by_levels.4;
-                assert_eq!(by_levels.0, sparse.0, "round {round}");
-                assert_eq!(by_levels.1, sparse.1, "round {round}");
-                assert_eq!(by_levels.2, sparse.2, "round {round}");
-                assert_eq!((by_levels.3, by_levels.4), (sparse.3, sparse.4), "round {round}");
+                for pairs_only in [false, true] {
+                    let (by_levels, sparse) = (run(false, pairs_only), run(true, pairs_only));
+                    checked += by_levels.3 + by_levels.4;
+                    assert_eq!(by_levels.0, sparse.0, "round {round}");
+                    assert_eq!(by_levels.1, sparse.1, "round {round}");
+                    assert_eq!(by_levels.2, sparse.2, "round {round}");
+                    assert_eq!((by_levels.3, by_levels.4), (sparse.3, sparse.4), "round {round}");
+                }
             }
         }
         assert!(checked > n, "too little was adjusted or checked: {checked}");
