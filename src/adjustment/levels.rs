@@ -14,6 +14,7 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
+use crate::validation::FeatherBoxes;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -79,7 +80,11 @@ pub enum Selection<'a> {
     /// exactly at its current pose (the validation's tests against its
     /// obstacles, at their final poses, and the body) and adjusted when the
     /// check fails. A frame can then leave alone feathers whose
-    /// surroundings moved a little, without letting them intersect.
+    /// surroundings moved a little, without letting them intersect. Here
+    /// propagation passes on only what can leave a feather standing on
+    /// nothing: an obstacle that sank (pitch) or shrank (scale) by more
+    /// than `threshold`, or rolled by more than it either way; one that
+    /// rose or grew into a feather fails that feather's exact check.
     Verify {
         /// Feathers adjusted in any case.
         seeds: &'a [bool],
@@ -254,6 +259,58 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (false, false))
+    }
+
+    /// As [`Adjuster::adjust_in_order_until`], one feather after the other
+    /// in `order` on the calling thread, visiting only the feathers
+    /// selected and those an adjusted feather listed as a candidate changed
+    /// under. For a few seeds over long candidate rows, where the levels of
+    /// everything downstream would cost more than the adjustments. The
+    /// candidate relation must be symmetric (`j` in row `i` exactly when `i`
+    /// is in row `j`, as with the full obstacle candidates). Meant for a
+    /// second pass over a frame whose first pass has checked the feathers
+    /// against the body: verifying, it tests only the pairs (the body has
+    /// not moved since, and a feather whose pose changes is adjusted with
+    /// every check). Apart from that the result is the same as with
+    /// levels, bitwise: a feather reads only earlier ones, final either
+    /// way, and one that no earlier adjusted feather changed under is left
+    /// alone by both.
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_sparse_until(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (true, true))
+    }
+
+    /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
+    /// `sparse`, verifying with every check or the pairs only (see
+    /// [`Adjuster::adjust_sparse_until`]).
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn ordered_run(
+        &mut self,
+        (frames, shapes, order, rank, candidates): (&[RootFrame], &[FeatherShape], &[u32], &[u32], CandidateLists<'_>),
+        poses: &mut [FeatherPose],
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+        (sparse, pairs_only): (bool, bool),
+    ) -> Option<AdjustStats> {
         let start = Instant::now();
         let n = frames.len();
         assert!(
@@ -271,8 +328,13 @@ impl Adjuster {
             Selection::All => {}
         }
         self.posed_triangles(frames, shapes, poses);
-        self.mark_scope(order, rank, candidates, selection);
-        let levels = self.assign_levels(order, rank, candidates);
+        let levels = if sparse {
+            self.mark_selected(n, selection);
+            0
+        } else {
+            self.mark_scope(order, rank, candidates, selection);
+            self.assign_levels(order, rank, candidates)
+        };
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
@@ -294,7 +356,33 @@ impl Adjuster {
         self.verified.resize(n, false);
 
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
-        let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection };
+        let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only };
+        if sparse {
+            for (k, &i) in order.iter().enumerate() {
+                if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
+                    return None;
+                }
+                let i = i as usize;
+                if !self.in_scope[i] {
+                    continue;
+                }
+                let marks = Marks { moved: &self.moved, changed: &self.changed };
+                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+                let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
+                self.apply(i, &visit, &inputs, poses, &mut stats);
+                if self.changed[i] {
+                    // What lies on it may now meet it or stand on nothing.
+                    for &j in candidates.of(i) {
+                        if rank[j as usize] > rank[i] {
+                            self.in_scope[j as usize] = true;
+                        }
+                    }
+                }
+            }
+            stats.levels = usize::from(stats.adjusted + stats.verified > 0);
+            stats.seconds = start.elapsed().as_secs_f64();
+            return Some(stats);
+        }
         for l in 0..levels {
             if !keep_going(l as f32 / levels.max(1) as f32) {
                 return None;
@@ -304,34 +392,70 @@ impl Adjuster {
             let marks = Marks { moved: &self.moved, changed: &self.changed };
             let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
             run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
-            for (&i, outcome) in items.iter().zip(outcomes.iter()) {
-                let o = match outcome {
-                    Visit::Adjusted(o) => o,
-                    Visit::Verified => {
-                        self.verified[i as usize] = true;
-                        stats.verified += 1;
-                        continue;
-                    }
-                    Visit::Skipped => continue,
-                };
-                let i = i as usize;
-                let old = poses[i];
-                if let Some(threshold) = selection.threshold() {
-                    self.moved[i] =
-                        (o.pose.pitch - old.pitch).abs() > threshold || (o.pose.roll - old.roll).abs() > threshold;
-                }
-                self.changed[i] = o.pose != old;
-                poses[i] = o.pose;
-                self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
-                self.spheres[i] = bounding_sphere(&self.triangles[i]);
-                self.adjusted[i] = true;
-                stats.adjusted += 1;
-                stats.collision_tests += u64::from(o.collision_tests);
-                stats.clamped += usize::from(o.clamped);
+            let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
+            for k in 0..end - start {
+                let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
+                self.apply(i, &outcome, &inputs, poses, &mut stats);
             }
         }
         stats.seconds = start.elapsed().as_secs_f64();
         Some(stats)
+    }
+
+    /// Records what became of feather `i`; an adjusted feather takes its
+    /// new pose (and triangles) and is marked moved past the threshold or
+    /// changed at all.
+    fn apply(
+        &mut self,
+        i: usize,
+        visit: &Visit,
+        inputs: &Inputs<'_>,
+        poses: &mut [FeatherPose],
+        stats: &mut AdjustStats,
+    ) {
+        let (frames, shapes, selection) = (inputs.frames, inputs.shapes, inputs.selection);
+        let o = match visit {
+            Visit::Adjusted(o) => o,
+            Visit::Verified => {
+                self.verified[i] = true;
+                stats.verified += 1;
+                return;
+            }
+            Visit::Skipped => return,
+        };
+        let old = poses[i];
+        if let Some(threshold) = selection.threshold() {
+            let rolled = (o.pose.roll - old.roll).abs() > threshold;
+            self.moved[i] = rolled
+                || if matches!(selection, Selection::Verify { .. }) {
+                    // A feather that rose or grew is checked against
+                    // by what lies on it; only one that sank or
+                    // shrank can leave them standing on nothing.
+                    old.pitch - o.pose.pitch > threshold || old.scale - o.pose.scale > threshold
+                } else {
+                    (o.pose.pitch - old.pitch).abs() > threshold
+                };
+        }
+        self.changed[i] = o.pose != old;
+        poses[i] = o.pose;
+        self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+        self.spheres[i] = bounding_sphere(&self.triangles[i]);
+        self.adjusted[i] = true;
+        stats.adjusted += 1;
+        stats.collision_tests += u64::from(o.collision_tests);
+        stats.clamped += usize::from(o.clamped);
+    }
+
+    /// The scope of a sparse run to begin with: the selected feathers.
+    fn mark_selected(&mut self, n: usize, selection: Selection<'_>) {
+        self.in_scope.clear();
+        match selection {
+            Selection::All => self.in_scope.resize(n, true),
+            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => self.in_scope.extend_from_slice(s),
+            Selection::Verify { seeds, suspects, .. } => {
+                self.in_scope.extend(seeds.iter().zip(suspects).map(|(&s, &v)| s | v))
+            }
+        }
     }
 
     /// Every feather's triangles at its current pose, and their spheres.
@@ -454,6 +578,8 @@ struct Inputs<'a> {
     params: &'a AdjustParams,
     steps: AdjustSteps,
     selection: Selection<'a>,
+    /// Verification tests the pairs only (see [`Adjuster::adjust_sparse_until`]).
+    pairs_only: bool,
 }
 
 /// What became of one feather of a level.
@@ -517,18 +643,24 @@ fn adjust_one(
 ) -> Visit {
     let ri = inputs.rank[i];
     let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let mut verify = false;
     if let Some(seeds) = inputs.selection.seeds()
         && !seeds[i]
         && !earlier.clone().any(|j| marks.moved[j])
     {
         let Selection::Verify { suspects, .. } = inputs.selection else { return Visit::Skipped };
-        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j]) {
+        // A changed obstacle that cannot matter to i at any size and pose
+        // is left out of its checks anyway.
+        let matters = |j: usize| {
+            let (centre, radius) = posed.spheres[j];
+            reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+        };
+        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j] && matters(j)) {
             return Visit::Skipped;
         }
         verify = true;
     }
-    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacles.clear();
     worker.obstacles.extend(earlier.filter_map(|j| {
         let (centre, radius) = posed.spheres[j];
@@ -541,8 +673,17 @@ fn adjust_one(
         })
     }));
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
-    if verify && pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field) {
-        return Visit::Verified;
+    if verify {
+        let clear = if inputs.pairs_only {
+            let mine = feather_triangles(frame, shape, poses[i]);
+            let mine = FeatherBoxes::new(&mine);
+            !worker.obstacles.iter().any(|o| mine.intersects(&o.triangles))
+        } else {
+            pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field)
+        };
+        if clear {
+            return Visit::Verified;
+        }
     }
     Visit::Adjusted(adjust_feather(
         &inputs.frames[i],
@@ -574,4 +715,111 @@ pub fn adjust_in_order(
 ) -> AdjustStats {
     let selection = subset.map_or(Selection::All, Selection::Subset);
     Adjuster::new().adjust_in_order(frames, shapes, poses, order, rank, candidates, body, params, steps, selection)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ordering::{NeighbourParams, Neighbourhoods};
+    use crate::rng::Rng;
+
+    /// A sparse run gives the poses, adjusted and verified flags of a run
+    /// by levels over the same symmetric candidates.
+    #[test]
+    fn a_sparse_run_matches_the_levels() {
+        let mut rng = Rng::new(7);
+        let (w, h) = (14, 10);
+        let frames: Vec<RootFrame> = (0..w * h)
+            .map(|k| {
+                let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
+                let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
+                RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
+            })
+            .collect();
+        let n = frames.len();
+        let shapes = vec![FeatherShape::for_spacing(1.0); n];
+        let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
+        let mut nb = Neighbourhoods::new();
+        nb.rebuild(&frames, &reach, &NeighbourParams::default());
+        let (offsets, indices) = nb.obstacle_csr();
+        let candidates = CandidateLists::new(offsets, indices);
+        // Tips first: the feathers farther along x are earlier.
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
+        let mut rank = vec![0u32; n];
+        for (k, &i) in order.iter().enumerate() {
+            rank[i as usize] = k as u32;
+        }
+        let body = BodyIndex::from_mesh(
+            &[
+                Vec3::new(-5.0, -5.0, -0.05),
+                Vec3::new(25.0, -5.0, -0.05),
+                Vec3::new(25.0, 20.0, -0.05),
+                Vec3::new(-5.0, 20.0, -0.05),
+            ],
+            &[[0, 1, 2], [0, 2, 3]],
+        );
+        let params = AdjustParams::default();
+        let mut start = vec![FeatherPose::default(); n];
+        let mut adjuster = Adjuster::new();
+        let all = adjuster.adjust_in_order(
+            &frames,
+            &shapes,
+            &mut start,
+            &order,
+            &rank,
+            candidates,
+            &body,
+            &params,
+            AdjustSteps::Full,
+            Selection::All,
+        );
+        assert_eq!(all.adjusted, n);
+        let mut checked = 0;
+        for round in 0..6 {
+            // Disturb some poses, then readjust a few seeds and check others.
+            let mut poses = start.clone();
+            for p in poses.iter_mut() {
+                if rng.next_f32() < 0.15 {
+                    p.pitch += 0.8 * rng.next_f32() - 0.4;
+                    p.roll += 0.4 * rng.next_f32() - 0.2;
+                }
+            }
+            let seeds: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.03 + 0.04 * round as f32).collect();
+            let suspects: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.1).collect();
+            let threshold = 0.05 + 0.1 * round as f32;
+            for selection in [
+                Selection::Verify { seeds: &seeds, suspects: &suspects, threshold },
+                Selection::Propagate { seeds: &seeds, threshold },
+            ] {
+                let run = |sparse: bool, pairs_only: bool| {
+                    let mut adjuster = Adjuster::new();
+                    let mut poses = poses.clone();
+                    let lists = (&frames[..], &shapes[..], &order[..], &rank[..], candidates);
+                    let stats = adjuster
+                        .ordered_run(
+                            lists,
+                            &mut poses,
+                            &body,
+                            &params,
+                            AdjustSteps::Full,
+                            selection,
+                            &|_| true,
+                            (sparse, pairs_only),
+                        )
+                        .unwrap();
+                    (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
+                };
+                for pairs_only in [false, true] {
+                    let (by_levels, sparse) = (run(false, pairs_only), run(true, pairs_only));
+                    checked += by_levels.3 + by_levels.4;
+                    assert_eq!(by_levels.0, sparse.0, "round {round}");
+                    assert_eq!(by_levels.1, sparse.1, "round {round}");
+                    assert_eq!(by_levels.2, sparse.2, "round {round}");
+                    assert_eq!((by_levels.3, by_levels.4), (sparse.3, sparse.4), "round {round}");
+                }
+            }
+        }
+        assert!(checked > n, "too little was adjusted or checked: {checked}");
+    }
 }

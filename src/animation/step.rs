@@ -28,8 +28,12 @@
 //! only if the check fails ([`Selection::Verify`]). The readjustments that
 //! remain are for drift: the seeds are the feathers whose surroundings
 //! moved by more than the drift tolerance times their length, and
-//! propagation passes on turns larger than the drift tolerance. `R_k`
-//! (at θs) still selects the pairs whose priorities are recomputed.
+//! propagation passes on a feather sinking, shrinking or rolling by more
+//! than the drift tolerance (one that rises into what lies on it fails
+//! their checks). A feather whose obstacles changed with the order is a
+//! seed only when it lost one (it may have rested on it); one that only
+//! gained obstacles is checked. `R_k` (at θs) still selects the pairs
+//! whose priorities are recomputed.
 
 use super::contact::Contacts;
 use super::motion::{RootMap, root_maps};
@@ -122,7 +126,7 @@ pub fn step_coat(
         report.reversals_refused = stats.reversals_refused;
         report.cycles_broken = stats.cycles_broken;
         // R*_k: add every feather whose obstacles changed.
-        obstacles_changed(coat, step);
+        obstacles_changed(coat, step, verify);
     }
     report.deformed = step.r_k.len();
     report.seeds = step.seeds.iter().filter(|s| **s).count();
@@ -170,7 +174,7 @@ pub fn step_coat(
             step.verified.extend_from_slice(work.adjuster.verified());
             step.no_suspects.clear();
             step.no_suspects.resize(n, false);
-            let more = pass.run(
+            let more = pass.run_sparse(
                 &mut work.adjuster,
                 &mut coat.poses,
                 CandidateLists::new(offsets, indices),
@@ -215,6 +219,44 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
+    /// As [`Pass::run`] one feather after the other, visiting only the
+    /// seeds and what the feathers it adjusts change under (the few
+    /// feathers of the missed-contact pass over the full, symmetric
+    /// candidate lists; the same poses as by levels).
+    fn run_sparse(
+        &self,
+        adjuster: &mut Adjuster,
+        poses: &mut [FeatherPose],
+        candidates: CandidateLists<'_>,
+        seeds: &[bool],
+        suspects: Option<&[bool]>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let d = self.dressing;
+        adjuster.adjust_sparse_until(
+            self.frames,
+            &d.shapes,
+            poses,
+            self.order.order(),
+            self.order.ranks(),
+            candidates,
+            self.body,
+            &d.adjust_params,
+            self.steps,
+            self.selection(seeds, suspects),
+            keep_going,
+        )
+    }
+
+    /// Verifying with `suspects`, or propagating past θs.
+    fn selection<'s>(&self, seeds: &'s [bool], suspects: Option<&'s [bool]>) -> Selection<'s> {
+        let d = self.dressing;
+        match suspects {
+            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
+            None => Selection::Propagate { seeds, threshold: d.theta_s },
+        }
+    }
+
     /// Adjusts `seeds` in order, and past θs what lies on them, with
     /// `candidates` as obstacle lists.
     fn run(
@@ -227,10 +269,7 @@ impl Pass<'_> {
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
-        let selection = match suspects {
-            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
-            None => Selection::Propagate { seeds, threshold: d.theta_s },
-        };
+        let selection = self.selection(seeds, suspects);
         adjuster.adjust_in_order_until(
             self.frames,
             &d.shapes,
@@ -290,24 +329,41 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
 
 /// Adds to the seeds every feather whose obstacles changed with the order
 /// or the candidate lists: a candidate lying over its footprint that was
-/// earlier and no longer is, or the other way round.
-fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace) {
+/// earlier and no longer is, or the other way round. Verifying, a feather
+/// that only gained obstacles is a suspect instead: the exact check against
+/// its obstacles at their final poses finds whether the new ones meet it,
+/// and nothing it rested on went away.
+fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (old_offsets, old_indices) = (&step.previous_offsets, &step.previous_indices);
     let (old_rank, rank) = (&step.previous_ranks, coat.order.ranks());
     let (contacts, frames) = (&step.contacts, &coat.frames);
     let n = step.seeds.len();
     let same_rows = old_offsets.len() == n + 1;
-    step.seeds.par_iter_mut().enumerate().with_min_len(128).filter(|(_, s)| !**s).for_each(|(i, seed)| {
-        let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
-        let old_row = if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
-        let footprint = contacts.footprint(i);
-        *seed = status_changes(old_row, new_row, |j, in_old, in_new| {
-            let was = in_old && old_rank[j] < old_rank[i];
-            let is = in_new && rank[j] < rank[i];
-            was != is && footprint.reached_by(&frames[i], contacts.sphere(j))
+    step.seeds
+        .par_iter_mut()
+        .zip(step.suspects.par_iter_mut())
+        .enumerate()
+        .with_min_len(128)
+        .filter(|(_, (s, _))| !**s)
+        .for_each(|(i, (seed, suspect))| {
+            let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
+            let old_row =
+                if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
+            let footprint = contacts.footprint(i);
+            let mut gained = false;
+            let lost = status_changes(old_row, new_row, |j, in_old, in_new| {
+                let was = in_old && old_rank[j] < old_rank[i];
+                let is = in_new && rank[j] < rank[i];
+                if was == is || !footprint.reached_by(&frames[i], contacts.sphere(j)) {
+                    return false;
+                }
+                gained |= is;
+                was || !verify
+            });
+            *seed = lost;
+            *suspect |= gained;
         });
-    });
 }
 
 /// Walks the union of two sorted rows; true as soon as `changed(j, in

@@ -43,6 +43,17 @@ impl KdTree {
         split_range(&mut self.items, &mut self.splits);
     }
 
+    /// The root ids in tree order, and where each leaf (a cell of at most
+    /// `LEAF_SIZE` roots lying close together) starts in it; `starts` ends
+    /// with the root count.
+    pub(crate) fn leaves(&self, ids: &mut Vec<u32>, starts: &mut Vec<u32>) {
+        ids.clear();
+        ids.extend(self.items.iter().map(|item| item.id));
+        starts.clear();
+        leaf_starts(0, self.items.len(), starts);
+        starts.push(self.items.len() as u32);
+    }
+
     /// Writes to `best` the (at most `k`) accepted roots nearest to `query`,
     /// sorted by distance then index, as `(squared distance, id)`.
     pub(crate) fn nearest(&self, query: Vec3, k: usize, accept: &impl Fn(u32) -> bool, best: &mut Vec<(f32, u32)>) {
@@ -68,6 +79,7 @@ impl KdTree {
 
     /// Calls `visit(id, squared distance)` for every root within
     /// `sqrt(radius_sq)` of `query` (boundary included), in tree order.
+    #[cfg(test)]
     pub(crate) fn within(&self, query: Vec3, radius_sq: f32, visit: &mut impl FnMut(u32, f32)) {
         self.visit_cells(query, radius_sq, |items| {
             for item in items {
@@ -135,6 +147,20 @@ fn split_range(items: &mut [Item], splits: &mut [(u8, f32)]) {
     let (left_splits, right_splits) = splits.split_at_mut(m);
     split_range(left_items, left_splits);
     split_range(right_items, right_splits);
+}
+
+/// Appends the start of every leaf of the range `[lo, hi)`, in order (the
+/// ranges [`split_range`] leaves unsplit).
+fn leaf_starts(lo: usize, hi: usize, starts: &mut Vec<u32>) {
+    if hi - lo <= LEAF_SIZE {
+        if hi > lo {
+            starts.push(lo as u32);
+        }
+        return;
+    }
+    let m = lo + (hi - lo) / 2;
+    leaf_starts(lo, m, starts);
+    leaf_starts(m, hi, starts);
 }
 
 /// The axis along which the items' bounding box is widest (lowest on ties).

@@ -7,6 +7,10 @@
 //! every frame allocates nothing once the buffers have grown to the root
 //! count. A k-d tree (not a uniform grid) is used because root density
 //! varies over a body by the density field; the tree needs no cell size.
+//! Its leaves (up to 16 roots lying close together) also serve as cells
+//! for the obstacle candidates: pairs of leaves within reach of each other
+//! are compared root against root, which costs far less than one radius
+//! query per root.
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
@@ -53,6 +57,15 @@ pub struct Neighbourhoods {
     bucket_items: Vec<u32>,
     fill_cursor: Vec<u32>,
     scratch_indices: Vec<u32>,
+    leaf_ids: Vec<u32>,
+    leaf_starts: Vec<u32>,
+    points: Vec<(glam::Vec3, f32)>,
+    cells: Vec<Cell>,
+    pair_scratch: Vec<(u32, u32, f32)>,
+    scratch_d2: Vec<f32>,
+    /// `|r_i − r_j|²` of every obstacle entry, beside `obstacle_indices`
+    /// (filled by [`rebuild`](Self::rebuild) only).
+    obstacle_d2: Vec<f32>,
 }
 
 impl Neighbourhoods {
@@ -121,6 +134,7 @@ impl Neighbourhoods {
     /// close its candidates hold its k nearest roots; only the other roots
     /// (none on a closed coat) query the tree. Both ways rank candidates by
     /// the same `(|r_j − r_i|², j)`, so the rows are those of the tree alone.
+    /// The distances of the candidates are those kept by the obstacle pass.
     fn rebuild_nearest(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
         let k = params.k;
         let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
@@ -130,12 +144,12 @@ impl Neighbourhoods {
         for (i, frame) in frames.iter().enumerate() {
             self.best.clear();
             if k > 0 {
-                for &j in row(&self.obstacle_offsets, &self.obstacle_indices, i as u32) {
-                    if !normals_agree(frame, &frames[j as usize], params.min_normal_dot) {
-                        continue;
-                    }
-                    let d2 = (frames[j as usize].position - frame.position).length_squared();
-                    if ranks_among_best(&self.best, k, d2, j) {
+                let entries = self.obstacle_offsets[i] as usize..self.obstacle_offsets[i + 1] as usize;
+                let distances = &self.obstacle_d2[entries.clone()];
+                for (&j, &d2) in self.obstacle_indices[entries].iter().zip(distances) {
+                    if ranks_among_best(&self.best, k, d2, j)
+                        && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
+                    {
                         insert_candidate(&mut self.best, k, d2, j);
                     }
                 }
@@ -194,12 +208,130 @@ impl Neighbourhoods {
         }
     }
 
+    /// Obstacle candidates, from the leaves of the tree: every pair of
+    /// leaves whose boxes come within the sum of their longest reaches is
+    /// compared root against root, each pair of roots once. The pruning is
+    /// exact (a box gap is never larger in `f32` than the gap between two
+    /// of the boxes' points, computed the same way), and so is the test,
+    /// `|r_i − r_j|² ≤ (reach_i + reach_j)²`, bitwise symmetric in i and j.
+    /// The pairs fill unsorted rows, whose transpose is the same relation
+    /// with every row sorted by index.
+    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32]) {
+        let n = frames.len();
+        self.obstacle_offsets.clear();
+        self.obstacle_indices.clear();
+        self.obstacle_d2.clear();
+        if reach.is_empty() {
+            self.obstacle_offsets.resize(n + 1, 0);
+            return;
+        }
+        self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
+        let ids = &self.leaf_ids;
+        self.points.clear();
+        self.points.extend(ids.iter().map(|&i| (frames[i as usize].position, sanitized_reach(reach[i as usize]))));
+        self.cells.clear();
+        for w in self.leaf_starts.windows(2) {
+            let points = &self.points[w[0] as usize..w[1] as usize];
+            let (lo, hi, reach) =
+                points.iter().fold((glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY, 0.0f32), |(lo, hi, r), &(p, q)| {
+                    (lo.min(p), hi.max(p), r.max(q))
+                });
+            self.cells.push(Cell { lo, hi, reach });
+        }
+        let (points, cells, starts) = (&self.points, &self.cells, &self.leaf_starts);
+        let pairs = &mut self.pair_scratch;
+        pairs.clear();
+        for (a, cell_a) in cells.iter().enumerate() {
+            let rows_a = starts[a] as usize..starts[a + 1] as usize;
+            for (b, cell_b) in cells.iter().enumerate().skip(a) {
+                if !cell_a.may_reach(cell_b) {
+                    continue;
+                }
+                let rows_b = starts[b] as usize..starts[b + 1] as usize;
+                for k in rows_a.clone() {
+                    let (p, r) = points[k];
+                    let from = if a == b { k + 1 } else { rows_b.start };
+                    for (l, &(q, s)) in points[from..rows_b.end].iter().enumerate() {
+                        let limit = r + s;
+                        let d2 = (q - p).length_squared();
+                        if d2 <= limit * limit {
+                            pairs.push((ids[k], ids[from + l], d2));
+                        }
+                    }
+                }
+            }
+        }
+        // Unsorted symmetric rows, then their transpose.
+        let offsets = &mut self.obstacle_offsets;
+        offsets.resize(n + 1, 0);
+        for &(i, j, _) in pairs.iter() {
+            offsets[i as usize + 1] += 1;
+            offsets[j as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        self.fill_cursor.clear();
+        self.fill_cursor.extend_from_slice(&offsets[..n]);
+        self.scratch_indices.clear();
+        self.scratch_indices.resize(2 * pairs.len(), 0);
+        self.scratch_d2.clear();
+        self.scratch_d2.resize(2 * pairs.len(), 0.0);
+        for &(i, j, d2) in pairs.iter() {
+            for (row, other) in [(i, j), (j, i)] {
+                let slot = &mut self.fill_cursor[row as usize];
+                self.scratch_indices[*slot as usize] = other;
+                self.scratch_d2[*slot as usize] = d2;
+                *slot += 1;
+            }
+        }
+        self.fill_cursor.clear();
+        self.fill_cursor.extend_from_slice(&offsets[..n]);
+        self.obstacle_indices.resize(self.scratch_indices.len(), 0);
+        self.obstacle_d2.clear();
+        self.obstacle_d2.resize(self.scratch_indices.len(), 0.0);
+        for i in 0..n as u32 {
+            let entries = offsets[i as usize] as usize..offsets[i as usize + 1] as usize;
+            for (&j, &d2) in self.scratch_indices[entries.clone()].iter().zip(&self.scratch_d2[entries]) {
+                let slot = &mut self.fill_cursor[j as usize];
+                self.obstacle_indices[*slot as usize] = i;
+                self.obstacle_d2[*slot as usize] = d2;
+                *slot += 1;
+            }
+        }
+    }
+}
+
+/// A leaf of the tree: the box of its roots and their longest reach.
+#[derive(Clone, Copy, Debug)]
+struct Cell {
+    lo: glam::Vec3,
+    hi: glam::Vec3,
+    reach: f32,
+}
+
+impl Cell {
+    /// Whether a root of `self` and one of `other` may lie within the sum
+    /// of their reaches: the gap between the boxes, squared as a point
+    /// distance is, is within the sum of the longest reaches. Per axis the
+    /// `f32` gap is no larger than any two points' `f32` difference
+    /// (rounding is monotone), so no pair within reach is left out.
+    #[inline]
+    fn may_reach(&self, other: &Cell) -> bool {
+        let gap = (other.lo - self.hi).max(self.lo - other.hi).max(glam::Vec3::ZERO);
+        let limit = self.reach + other.reach;
+        gap.length_squared() <= limit * limit
+    }
+}
+
+#[cfg(test)]
+impl Neighbourhoods {
     /// Obstacle candidates: one radius query per root, in tree order, into
     /// scratch rows; then a transpose. The relation is symmetric bitwise
     /// (distances and `reach_i + reach_j` commute, and
     /// the tree query is exact), so the transpose of the scratch rows is the
     /// same relation with every row sorted by index, without sorting.
-    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32]) {
+    fn obstacles_by_tree(&mut self, frames: &[RootFrame], reach: &[f32]) {
         let n = frames.len();
         self.obstacle_offsets.clear();
         self.obstacle_offsets.push(0);
@@ -407,6 +539,47 @@ mod tests {
         let s = Neighbourhoods::read_state(&mut r, roots)?;
         r.finish()?;
         Ok(s)
+    }
+
+    #[test]
+    fn leaf_pairs_give_the_tree_queries_obstacles_bitwise() {
+        let mut rng = crate::rng::Rng::new(11);
+        let (patch_frames, patch_reach) = patch();
+        let mut cases = vec![(patch_frames, patch_reach)];
+        for (n, spread) in [(1usize, 1.0f32), (17, 0.5), (600, 6.0), (2000, 20.0)] {
+            let frames: Vec<RootFrame> = (0..n)
+                .map(|k| {
+                    // Some roots repeat a position exactly.
+                    let p = if k % 37 == 5 {
+                        Vec3::ZERO
+                    } else {
+                        Vec3::new(rng.next_f32(), rng.next_f32(), 0.3 * rng.next_f32()) * spread
+                    };
+                    RootFrame::from_normal_and_direction(p, Vec3::Z, Vec3::X).unwrap()
+                })
+                .collect();
+            let reach = (0..n).map(|k| if k % 11 == 3 { 0.0 } else { 0.2 + rng.next_f32() }).collect();
+            cases.push((frames, reach));
+        }
+        for (frames, reach) in cases {
+            let mut nb = Neighbourhoods::new();
+            nb.rebuild(&frames, &reach, &NeighbourParams::default());
+            let mut by_tree = nb.clone();
+            by_tree.obstacles_by_tree(&frames, &reach);
+            assert_eq!(nb.obstacle_csr(), by_tree.obstacle_csr(), "{} roots", frames.len());
+            // The k nearest from the rows are the tree's.
+            let params = NeighbourParams::default();
+            let mut best = Vec::new();
+            for (i, frame) in frames.iter().enumerate() {
+                let accept =
+                    |j: u32| j as usize != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+                nb.tree.nearest(frame.position, params.k, &accept, &mut best);
+                let ids: Vec<u32> = best.iter().map(|b| b.1).collect();
+                assert_eq!(nb.neighbours_of(i as u32), &ids[..], "root {i} of {}", frames.len());
+            }
+            nb.rebuild(&frames, &[], &NeighbourParams::default());
+            assert!(nb.obstacle_csr().1.is_empty() && nb.obstacle_csr().0.len() == frames.len() + 1);
+        }
     }
 
     #[test]
