@@ -103,8 +103,35 @@ fn point() -> impl Strategy<Value = [f64; 3]> {
     [-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0]
 }
 
+/// How far, relative to the size, the point where an edge of `s` crosses
+/// the plane of `t` lies from the nearest edge line of `t` (infinite when
+/// no edge crosses). Near 0, the triangles cross by a sliver within the
+/// contact tolerance, or their edges pass within it of each other.
+fn min_crossing_margin(s: &[DVec3; 3], t: &[DVec3; 3]) -> f64 {
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let mut margin = f64::INFINITY;
+    for k in 0..3 {
+        let (p, q) = (s[k], s[(k + 1) % 3]);
+        let (dp, dq) = (n.dot(p - t[0]), n.dot(q - t[0]));
+        if dp * dq >= 0.0 {
+            continue;
+        }
+        let x = p + (q - p) * (dp / (dp - dq));
+        for j in 0..3 {
+            let e = t[(j + 1) % 3] - t[j];
+            margin = margin.min((n.cross(e).dot(x - t[j]) / (n.length() * e.length())).abs());
+        }
+    }
+    margin
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(if cfg!(debug_assertions) { 2000 } else { 20000 }))]
+    // A fixed seed keeps the suite reproducible (set PROPTEST_RNG_SEED or
+    // change the seed to explore further).
+    #![proptest_config(ProptestConfig {
+        rng_seed: proptest::test_runner::RngSeed::Fixed(0x706c_756d_6167_65),
+        ..ProptestConfig::with_cases(if cfg!(debug_assertions) { 2000 } else { 20000 })
+    })]
 
     #[test]
     fn agrees_with_brute_force_segment_tests(a in [point(), point(), point()], b in [point(), point(), point()]) {
@@ -115,8 +142,35 @@ proptest! {
         // within reach of the contact tolerance of the other plane.
         prop_assume!(area(&a) > 1e-3 && area(&b) > 1e-3);
         prop_assume!(min_plane_distance(&a, &b) > 1e-4 && min_plane_distance(&b, &a) > 1e-4);
+        // ... and no edge passing within reach of the tolerance of an edge
+        // of the other (see `edges_passing_within_the_tolerance_are_contact`).
+        prop_assume!(min_crossing_margin(&a, &b) > 1e-4 && min_crossing_margin(&b, &a) > 1e-4);
         prop_assert_eq!(triangles_intersect_f64(&a, &b), brute_force(&a, &b));
     }
+}
+
+/// A case the random comparison once found: each triangle's edge crosses
+/// the other within 2e-6 of the size from an edge, so the two overlap by a
+/// sliver thinner than the contact tolerance. The exact test calls that
+/// contact (as it does a corner resting within the tolerance of a face);
+/// the tolerance-free segment test calls it a crossing.
+#[test]
+fn edges_passing_within_the_tolerance_are_contact() {
+    let a = [
+        [-0.8397923188295927, 0.0, 0.0],
+        [-0.229810402572714, 0.6900034537515894, -0.9275022316889836],
+        [-0.2589752500219251, -0.5850298783728058, 0.7509379521774532],
+    ]
+    .map(DVec3::from_array);
+    let b = [
+        [0.6235833203828065, 0.8789003867763575, 0.2794189094557038],
+        [-0.33132854055148114, 0.43074174581019664, -0.7500790891788811],
+        [0.0, 0.0, -0.6796771219467483],
+    ]
+    .map(DVec3::from_array);
+    assert!(brute_force(&a, &b), "the segments cross, by a sliver");
+    assert!(min_crossing_margin(&a, &b) < 1e-5 && min_crossing_margin(&b, &a) < 1e-5);
+    assert!(!triangles_intersect_f64(&a, &b) && !triangles_intersect_f64(&b, &a));
 }
 
 /// Random feathers, many of them crossing, in a small box.

@@ -202,7 +202,8 @@ fn exact_pitch_sweep(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
-            if pose_is_clear(frame, shape, pose, obstacles, body, scratch) && clear_of_tops(frame, shape, pose, obstacles)
+            if pose_is_clear(frame, shape, pose, obstacles, body, scratch)
+                && clear_of_tops(frame, shape, pose, obstacles)
             {
                 return Some(pose);
             }
