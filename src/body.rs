@@ -439,6 +439,13 @@ impl BodyIndex {
         self.grid.corners(t)
     }
 
+    /// The bounding box of body triangle `t` (the one
+    /// [`BodyIndex::triangles_in_box`] tests).
+    #[inline]
+    pub(crate) fn bounds(&self, t: u32) -> Aabb {
+        self.grid.bounds(t)
+    }
+
     /// The unit face normal of body triangle `t` (zero if degenerate).
     #[inline]
     pub fn normal(&self, t: u32) -> Vec3 {

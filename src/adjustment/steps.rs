@@ -32,7 +32,7 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
-use crate::validation::{FeatherBoxes, penetrates_body};
+use crate::validation::{FeatherBoxes, penetrates_body_hinted};
 use glam::Vec3;
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
@@ -56,7 +56,7 @@ const REFILL_BELOW: f32 = 0.5;
 /// several degrees, and every later feather lying on it climbs as well.
 /// A pose chosen with the relaxed distance is kept only if the exact check
 /// passes and the feather also stays clear of every obstacle's top (see
-/// [`clear_of_tops`]), so the thickness is still respected.
+/// [`raised_top`]), so the thickness is still respected.
 ///
 /// Measured with the exact sweep below (coverage, mean pitch): judging
 /// conservatively only, Flamingo 0.864/27.9°, Fox 0.953/30.2°, bird
@@ -110,6 +110,7 @@ pub fn adjust_feather(
     let mut sizes = SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale);
     let mut scale = 1.0;
     let mut last = FeatherPose::new(params.max_pitch, 0.0);
+    let mut hints = CheckHints::default();
     let found = 'sizes: loop {
         for judge in [RELAXED_JUDGE_FRACTION, JUDGE_FRACTION] {
             scratch.set_judge_fraction(judge, filled_length);
@@ -118,8 +119,7 @@ pub fn adjust_feather(
             last = choice.pose;
             let relaxed = judge != JUDGE_FRACTION;
             if !choice.too_steep
-                && pose_is_clear(frame, shape, choice.pose, obstacles, body, scratch)
-                && (!relaxed || clear_of_tops(frame, shape, choice.pose, obstacles))
+                && exact_check(frame, shape, choice.pose, obstacles, body, scratch, relaxed, &mut hints)
             {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
@@ -153,7 +153,9 @@ pub fn adjust_feather(
         Some(choice) => (choice.pose.scale, SWEEP_MAX_PITCH.min(params.max_pitch)),
         None => (0.0, params.max_pitch),
     };
-    if let Some(pose) = exact_pitch_sweep(frame, shape, params, obstacles, body, scratch, smallest, max_pitch) {
+    if let Some(pose) =
+        exact_pitch_sweep(frame, shape, params, obstacles, body, scratch, smallest, max_pitch, &mut hints)
+    {
         return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0 };
     }
     match found {
@@ -173,7 +175,7 @@ const SWEEP_PITCHES: usize = 24;
 const SWEEP_MAX_PITCH: f32 = 0.6;
 
 /// The first pose clear by the exact check alone (and clear of the
-/// obstacles' tops, see [`clear_of_tops`]), trying the sizes of
+/// obstacles' tops, see [`raised_top`]), trying the sizes of
 /// `SHRINK_STEPS` larger than `smallest` (from full size), and at each
 /// the pitches from the lowest allowed up to `max_pitch` in the steps of
 /// `SWEEP_PITCHES`, unrolled.
@@ -192,6 +194,7 @@ fn exact_pitch_sweep(
     scratch: &mut HeightField,
     smallest: f32,
     max_pitch: f32,
+    hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
     let sizes = std::iter::once(1.0).chain(SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale));
     for scale in sizes.take_while(|&s| s > smallest) {
@@ -202,9 +205,7 @@ fn exact_pitch_sweep(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
-            if pose_is_clear(frame, shape, pose, obstacles, body, scratch)
-                && clear_of_tops(frame, shape, pose, obstacles)
-            {
+            if exact_check(frame, shape, pose, obstacles, body, scratch, true, hints) {
                 return Some(pose);
             }
         }
@@ -279,27 +280,74 @@ pub(crate) fn pose_is_clear(
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
-    let mine = feather_triangles(frame, shape, pose);
-    let mine = FeatherBoxes::new(&mine);
-    if obstacles.iter().any(|o| mine.intersects(&o.triangles)) {
-        return false;
-    }
-    !penetrates_body(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids)
+    exact_check(frame, shape, pose, obstacles, body, scratch, false, &mut CheckHints::default())
 }
 
-/// Whether the posed feather stays clear of every obstacle's top: its two
-/// triangles raised by its thickness along their own normals (away from
-/// the skin they grow from). With [`pose_is_clear`] this keeps a feather
-/// out of the slab an obstacle fills, except for parts that end inside it.
-fn clear_of_tops(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose, obstacles: &[ObstacleFeather]) -> bool {
+/// What made the last exact checks of one feather fail: the obstacle and
+/// body triangle tested first by the next check (poses a little apart
+/// mostly fail on the same one). Only the order of the tests depends on
+/// them, never an answer.
+#[derive(Clone, Copy, Debug, Default)]
+struct CheckHints {
+    obstacle: Option<usize>,
+    top: Option<usize>,
+    body: Option<u32>,
+}
+
+/// Whether `test` holds for some obstacle, trying `hint` first and
+/// setting it to the one found.
+fn any_obstacle(
+    obstacles: &[ObstacleFeather],
+    hint: &mut Option<usize>,
+    test: impl Fn(&ObstacleFeather) -> bool,
+) -> bool {
+    if hint.and_then(|k| obstacles.get(k)).is_some_and(&test) {
+        return true;
+    }
+    match obstacles.iter().position(test) {
+        Some(k) => {
+            *hint = Some(k);
+            true
+        }
+        None => false,
+    }
+}
+
+/// [`pose_is_clear`], and with `tops` also clear of every [`raised_top`]
+/// (last: most poses that fail, fail before it).
+#[allow(clippy::too_many_arguments)]
+fn exact_check(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    tops: bool,
+    hints: &mut CheckHints,
+) -> bool {
     let mine = FeatherBoxes::new(&feather_triangles(frame, shape, pose));
-    !obstacles.iter().any(|o| {
-        let raise = |t: [Vec3; 3]| {
-            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * o.thickness;
-            [t[0] + n, t[1] + n, t[2] + n]
-        };
-        mine.intersects(&[raise(o.triangles[0]), raise(o.triangles[1])])
-    })
+    if any_obstacle(obstacles, &mut hints.obstacle, |o| mine.intersects(&o.triangles)) {
+        return false;
+    }
+    if penetrates_body_hinted(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids, &mut hints.body)
+    {
+        return false;
+    }
+    !(tops && any_obstacle(obstacles, &mut hints.top, |o| mine.intersects(&raised_top(o))))
+}
+
+/// An obstacle's top: its two triangles raised by its thickness along
+/// their own normals (away from the skin they grow from). A feather clear
+/// of every obstacle's top (tested in [`exact_check`]) and passing
+/// [`pose_is_clear`] stays out of the slab an obstacle fills, except for
+/// parts that end inside it.
+fn raised_top(o: &ObstacleFeather) -> [[Vec3; 3]; 2] {
+    let raise = |t: [Vec3; 3]| {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * o.thickness;
+        [t[0] + n, t[1] + n, t[2] + n]
+    };
+    [raise(o.triangles[0]), raise(o.triangles[1])]
 }
 
 /// Clears `field` over `shape`'s footprint and rasterises the obstacles and

@@ -182,6 +182,22 @@ pub(crate) fn penetrates_body(
     part: &mut Vec<[Vec3; 3]>,
     ids: &mut Vec<u32>,
 ) -> bool {
+    penetrates_body_hinted(frame, shape, pose, body, part, ids, &mut None)
+}
+
+/// [`penetrates_body`], testing body triangle `hint` first (when the
+/// query would return it), and setting `hint` to the body triangle found
+/// crossing. The answer is the same whatever the hint: only the order of
+/// the tests changes, and a hint that crosses spares the box query.
+pub(crate) fn penetrates_body_hinted(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    body: &BodyIndex,
+    part: &mut Vec<[Vec3; 3]>,
+    ids: &mut Vec<u32>,
+    hint: &mut Option<u32>,
+) -> bool {
     if pose.scale <= 0.0 {
         // A feather left out (size 0) is a point on the skin.
         return false;
@@ -190,17 +206,30 @@ pub(crate) fn penetrates_body(
     let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
         return false;
     };
-    body.triangles_in_box(&bounds, ids);
     // Each triangle prepared once for all its tests.
     let mut prepared = [Prepared::of(&part[0]); 4];
     for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
         *p = Prepared::of(t);
     }
     let prepared = &prepared[..part.len().min(4)];
-    let crosses = ids.iter().any(|&t| {
+    let crossing = |t: u32| {
         let tri = Prepared::of(&body.corners(t));
         prepared.iter().any(|p| prepared_intersect(p, &tri))
-    });
+    };
+    // The box query returns exactly the triangles whose boxes overlap
+    // `bounds` (none when `bounds` is not a proper box).
+    let queried = |h: u32| {
+        (h as usize) < body.triangle_count() && bounds.min.cmple(bounds.max).all() && body.bounds(h).overlaps(&bounds)
+    };
+    if hint.is_some_and(|h| queried(h) && crossing(h)) {
+        return true;
+    }
+    body.triangles_in_box(&bounds, ids);
+    let found = ids.iter().copied().find(|&t| crossing(t));
+    let crosses = found.is_some();
+    if found.is_some() {
+        *hint = found;
+    }
     // Without a crossing each triangle lies on one side of the skin (the two
     // vanes may lie on different sides, meeting it along the shaft): its
     // first corner clearly off the skin tells which. The triangles of one
