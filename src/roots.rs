@@ -68,7 +68,7 @@ pub enum RootNormal {
     /// sit on the surface, for sampling and its figures.
     Smooth,
     /// The smooth normal turned towards the face normal until at most 15°
-    /// from it: the frame feathers grow in (see [`tilt_limited`]).
+    /// from it: the frame feathers grow in (see `tilt_limited`).
     FaceLimited,
 }
 

@@ -370,7 +370,7 @@ fn apply(bytes: &mut Vec<u8>, mutations: &[Mutation]) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(0x706c_756d_6167_65), cases: 200, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(0x0070_6c75_6d61_6765), cases: 200, ..ProptestConfig::default() })]
 
     #[test]
     fn random_bytes_are_refused(bytes in prop::collection::vec(any::<u8>(), 0..2048)) {

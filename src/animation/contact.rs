@@ -12,7 +12,7 @@
 //!
 //! A frame passes the adjustment only the candidates that touch or come
 //! within a pose margin of touching ([`Contacts::obstacle_rows`]): the
-//! margin covers a pitch or roll change of up to [`POSE_MARGIN`] radians of
+//! margin covers a pitch or roll change of up to `POSE_MARGIN` radians of
 //! the candidate during the frame. That list serves the adjustment both as
 //! obstacles and for propagation (a feather that moved past θs pulls in the
 //! feathers it lies on, not every feather within reach). A candidate that
