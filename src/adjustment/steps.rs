@@ -118,6 +118,14 @@ pub fn adjust_feather(
             choice.pose.scale = scale;
             last = choice.pose;
             let relaxed = judge != JUDGE_FRACTION;
+            // The conservative judging demands at least the relaxed pitch
+            // of every cell, so after a relaxed pose too steep for the limit
+            // it would stand too steep as well; go to the next size. (Not a
+            // proof once roll enters: the five test models' poses are the
+            // same with and without the retry; 3.9 % fewer instructions.)
+            if relaxed && choice.too_steep {
+                break;
+            }
             if !choice.too_steep
                 && exact_check(frame, shape, choice.pose, obstacles, body, scratch, relaxed, &mut hints)
             {
