@@ -145,6 +145,7 @@ pub fn step_coat(
         let full = CandidateLists::new(offsets, indices);
         work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
         let stats = pass.run(
+            Walk::Levels,
             &mut work.adjuster,
             &mut coat.poses,
             CandidateLists::new(rows.0, rows.1),
@@ -174,7 +175,8 @@ pub fn step_coat(
             step.verified.extend_from_slice(work.adjuster.verified());
             step.no_suspects.clear();
             step.no_suspects.resize(n, false);
-            let more = pass.run_sparse(
+            let more = pass.run(
+                Walk::Sparse,
                 &mut work.adjuster,
                 &mut coat.poses,
                 CandidateLists::new(offsets, indices),
@@ -219,35 +221,6 @@ struct Pass<'a> {
 }
 
 impl Pass<'_> {
-    /// As [`Pass::run`] one feather after the other, visiting only the
-    /// seeds and what the feathers it adjusts change under (the few
-    /// feathers of the missed-contact pass over the full, symmetric
-    /// candidate lists; the same poses as by levels).
-    fn run_sparse(
-        &self,
-        adjuster: &mut Adjuster,
-        poses: &mut [FeatherPose],
-        candidates: CandidateLists<'_>,
-        seeds: &[bool],
-        suspects: Option<&[bool]>,
-        keep_going: &dyn Fn(f32) -> bool,
-    ) -> Option<AdjustStats> {
-        let d = self.dressing;
-        adjuster.adjust_sparse_until(
-            self.frames,
-            &d.shapes,
-            poses,
-            self.order.order(),
-            self.order.ranks(),
-            candidates,
-            self.body,
-            &d.adjust_params,
-            self.steps,
-            self.selection(seeds, suspects),
-            keep_going,
-        )
-    }
-
     /// Verifying with `suspects`, or propagating past θs.
     fn selection<'s>(&self, seeds: &'s [bool], suspects: Option<&'s [bool]>) -> Selection<'s> {
         let d = self.dressing;
@@ -258,9 +231,12 @@ impl Pass<'_> {
     }
 
     /// Adjusts `seeds` in order, and past θs what lies on them, with
-    /// `candidates` as obstacle lists.
+    /// `candidates` as obstacle lists, by levels or one feather after the
+    /// other (see [`Walk`]); the same poses either way.
+    #[allow(clippy::too_many_arguments)]
     fn run(
         &self,
+        walk: Walk,
         adjuster: &mut Adjuster,
         poses: &mut [FeatherPose],
         candidates: CandidateLists<'_>,
@@ -270,7 +246,12 @@ impl Pass<'_> {
     ) -> Option<AdjustStats> {
         let d = self.dressing;
         let selection = self.selection(seeds, suspects);
-        adjuster.adjust_in_order_until(
+        let run = match walk {
+            Walk::Levels => Adjuster::adjust_in_order_until,
+            Walk::Sparse => Adjuster::adjust_sparse_until,
+        };
+        run(
+            adjuster,
             self.frames,
             &d.shapes,
             poses,
@@ -284,6 +265,17 @@ impl Pass<'_> {
             keep_going,
         )
     }
+}
+
+/// How a [`Pass`] goes through the coat.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Walk {
+    /// By levels of the obstacle relation, in parallel: the first pass.
+    Levels,
+    /// One feather after the other, visiting only the seeds and what the
+    /// feathers it adjusts change under: the few feathers of the
+    /// missed-contact pass over the full, symmetric candidate lists.
+    Sparse,
 }
 
 /// Keeps the root frames, ranks and obstacle candidates of the frame being left.
