@@ -603,13 +603,26 @@ typedef struct PlumageValidation {
    */
   uint64_t body_penetrations;
   /**
-   * Fraction of surface probes whose normal ray meets a feather.
+   * Fraction of the probes of the feathered, visible skin whose normal
+   * ray meets a feather within the longest feather length. Bare skin
+   * (spacing multiplier 0) and skin buried inside the body (where the
+   * mesh passes through itself) carry no probes.
    */
   double coverage;
   /**
    * Mean pitch of the feathers, degrees.
    */
   double mean_pitch_deg;
+  /**
+   * Probes behind `coverage` (appended; a shorter, older struct is
+   * filled up to its `struct_size`).
+   */
+  uint64_t probes;
+  /**
+   * Probes of the feathered skin left out of `coverage` because they lie
+   * inside the body.
+   */
+  uint64_t buried_probes;
 } PlumageValidation;
 
 #ifdef __cplusplus

@@ -32,6 +32,9 @@ pub struct Dressing {
     pub triangles: Vec<[u32; 3]>,
     /// For each welded triangle, the caller's triangle index.
     pub source_triangle: Vec<u32>,
+    /// For each welded vertex, whether it carries feathers (its spacing
+    /// multiplier is positive); empty when every vertex does.
+    pub feathered: Vec<bool>,
     /// Where each feather is planted.
     pub roots: Vec<RootBinding>,
     /// Each feather's dimensions.
@@ -66,6 +69,7 @@ impl Dressing {
             surface,
             triangles: mesh.triangles.clone(),
             source_triangle: mesh.source_triangle.clone(),
+            feathered: Vec::new(),
             reach: shapes.iter().map(|s| s.length).collect(),
             shapes,
             roots,

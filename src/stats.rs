@@ -88,8 +88,14 @@ pub struct ValidationReport {
     pub intersecting_pairs: usize,
     /// Feathers crossing the body more than 5 % of their length from the root.
     pub body_penetrations: usize,
-    /// Fraction of surface probes whose normal ray meets a feather.
+    /// Fraction of the probes of the feathered, visible skin whose normal
+    /// ray meets a feather within the longest feather length.
     pub coverage: f64,
+    /// Probes behind `coverage`.
+    pub probes: usize,
+    /// Probes of the feathered skin left out because they lie inside the
+    /// body (where the mesh passes through itself).
+    pub buried_probes: usize,
     /// Mean pitch in degrees.
     pub mean_pitch_deg: f64,
 }

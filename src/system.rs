@@ -17,7 +17,7 @@ use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
-use crate::validation::validate;
+use crate::validation::{ProbeSkin, validate};
 use glam::Vec3;
 
 /// Probes per feather for the coverage figure of [`System::validate`].
@@ -73,7 +73,10 @@ impl System {
         progress.check(Phase::Sampling, 0.0)?;
         let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
         progress.check(Phase::Sampling, 1.0)?;
-        let dressing = Dressing::new(surface, &welded, sampling.roots, config);
+        let mut dressing = Dressing::new(surface, &welded, sampling.roots, config);
+        if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
+            dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
+        }
         let sampling_report = SamplingReport {
             roots: dressing.len(),
             spacing: sampling.spacing,
@@ -205,8 +208,11 @@ impl System {
                 &self.dressing.shapes,
                 &c.poses,
                 &c.body,
-                &c.positions,
-                &self.dressing.triangles,
+                &ProbeSkin {
+                    positions: &c.positions,
+                    triangles: &self.dressing.triangles,
+                    feathered: &self.dressing.feathered,
+                },
                 probes,
                 self.config.seed,
             )
@@ -215,6 +221,8 @@ impl System {
             intersecting_pairs: v.intersecting_pairs.len(),
             body_penetrations: v.body_penetrations.len(),
             coverage: v.coverage,
+            probes: v.probes,
+            buried_probes: v.buried_probes,
             mean_pitch_deg: v.mean_pitch_deg,
         })
     }

@@ -12,7 +12,7 @@ use plumage::body::BodyIndex;
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
-use plumage::validation::{Validation, coverage, intersecting_pairs, validate};
+use plumage::validation::{ProbeSkin, Validation, coverage, intersecting_pairs, validate};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -215,8 +215,7 @@ impl Scene {
             &self.shapes,
             poses,
             &self.body,
-            &self.positions,
-            &self.triangles,
+            &ProbeSkin::whole(&self.positions, &self.triangles),
             probes,
             7,
         )
@@ -450,7 +449,7 @@ fn plane_coat_is_clean_and_closed() {
         Vec3::new(shape.length + (w - shape.length) * u, shape.width + (h - 2.0 * shape.width) * v, 0.0)
     });
     let tris = scene.triangles_at(&poses);
-    let cov = coverage(&tris, shape.length, &probe_pos, &probe_tris, 3000, 11);
+    let cov = coverage(&tris, shape.length, &ProbeSkin::whole(&probe_pos, &probe_tris), &scene.body, 3000, 11);
     assert!(cov >= 0.95, "plane interior coverage {cov}");
     assert!(v.mean_pitch_deg > 0.0 && v.mean_pitch_deg < 15.0, "mean pitch {}", v.mean_pitch_deg);
     assert!(stats.clamped == 0, "{} clamped", stats.clamped);
@@ -499,7 +498,14 @@ fn torus_coat_is_clean() {
     );
     assert_clean("torus", &v);
     let skin = scene.feathered_skin();
-    let cov = coverage(&scene.triangles_at(&poses), scene.shapes[0].length, &scene.positions, &skin, 4000, 13);
+    let cov = coverage(
+        &scene.triangles_at(&poses),
+        scene.shapes[0].length,
+        &ProbeSkin::whole(&scene.positions, &skin),
+        &scene.body,
+        4000,
+        13,
+    );
     // Lower than on the sphere: the flow diverges at the outer −x point (a
     // source), and the tube's tight curvature opens gaps between vanes.
     assert!(cov >= 0.9, "torus coverage {cov} on the feathered skin");

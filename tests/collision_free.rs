@@ -3,14 +3,17 @@
 //! a sphere, a torus whose hint field circles the ring (a cyclic flow), and
 //! the three shared models with a flow from the head (`Config::flow_source`).
 //!
-//! Intersecting pairs and body penetrations must be exactly 0. Coverage is
-//! asserted a little below the level reached today; the target is
-//! 0.95, met by the sphere (0.987), the torus (0.989) and the Fox (0.961),
-//! not yet by the Flamingo (0.891) or the bird (0.871). What is left bare
-//! there: the rims of thin wings and the thin legs (a flat feather over a
-//! wing lies parallel to the rim's normal, and the probes' rays there leave
-//! the coat between the two skins' feathers), feathers pitched up on thin
-//! limbs and at wing roots, and feathers shortened in creases.
+//! Intersecting pairs and body penetrations must be exactly 0. Coverage
+//! (over the visible skin: the bird's belly passes through its wings, and
+//! the Flamingo's legs and neck through its body, and the skin buried there
+//! carries no probes) is asserted a little below the level reached today;
+//! the target is 0.95, met by the sphere (0.988), the torus (0.989)
+//! and the Fox (0.962), not yet by the Flamingo (0.903) or the bird
+//! (0.876). What is left bare there: the rims of thin wings and the thin
+//! legs (a flat feather over a wing lies parallel to the rim's normal, and
+//! the probes' rays there leave the coat between the two skins' feathers),
+//! feathers pitched up on thin limbs and at wing roots, and feathers
+//! shortened in creases.
 
 mod common;
 
@@ -108,9 +111,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
 #[test]
 fn shared_models_at_rest_are_collision_free() {
     let models = [
-        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.885),
+        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.895),
         ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.955),
-        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.865),
+        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.87),
     ];
     for (file, feathers, head, min_coverage) in models {
         let Some(shape) = load_model(file) else { continue };
@@ -118,6 +121,26 @@ fn shared_models_at_rest_are_collision_free() {
         let (system, v) = dress(&shape, None, &config);
         assert_collision_free(file, &system, &v, min_coverage);
     }
+}
+
+/// Skin the caller marks bare (spacing multiplier 0) carries no feathers
+/// and no coverage probes: a sphere feathered on its upper half only is
+/// judged on that half.
+#[test]
+fn bare_skin_is_left_out_of_coverage() {
+    let shape = sphere(30, 60, 10.0);
+    let feathered_above =
+        |z: f32| shape.positions.chunks(3).map(|p| if p[2] > z { 1.0 } else { 0.0 }).collect::<Vec<f32>>();
+    let config = Config { target_feathers: 600, threads: 2, ..Config::default() };
+    let upper = feathered_above(0.0);
+    let mut mesh = MeshInput::new(&shape.positions, &shape.indices);
+    mesh.spacing_scale = Some(&upper);
+    let half = System::new(&config, &mesh).expect("create");
+    let v = half.validate().expect("figures");
+    assert!(half.feathers().iter().all(|f| f.root[2] > -1.0), "a root on the bare half");
+    // Counting the bare half would put coverage near 0.5.
+    assert_collision_free("upper half", &half, &v, 0.9);
+    assert!(v.probes > 0 && v.buried_probes == 0, "{v:?}");
 }
 
 /// Fluffiness lifts every feather, so the mean pitch rises with it; a

@@ -8,8 +8,8 @@ use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{
-    body_penetrations, coverage, intersecting_pairs, mean_pitch_deg, triangles_intersect, triangles_intersect_f64,
-    validate,
+    ProbeSkin, body_penetrations, coverage, intersecting_pairs, mean_pitch_deg, triangles_intersect,
+    triangles_intersect_f64, validate,
 };
 use proptest::prelude::*;
 
@@ -264,18 +264,25 @@ fn body_penetration_ignores_the_root_socket() {
 
 #[test]
 fn coverage_counts_probes_under_feathers() {
-    let (pos, tris, _) = plane_body(1.0);
+    let (pos, tris, body) = plane_body(1.0);
     // A huge flat feather a little above the whole patch: everything covered.
     let lifted = RootFrame::from_normal_and_direction(Vec3::new(-3.0, 0.0, 0.1), Vec3::Z, Vec3::X).unwrap();
     let big = FeatherShape { length: 8.0, width: 12.0, thickness: 0.01, vane_split: 0.3 };
     let cover = [feather_triangles(&lifted, &big, FeatherPose::default())];
-    assert_eq!(coverage(&cover, 6.0, &pos, &tris, 500, 3), 1.0);
+    assert_eq!(coverage(&cover, 6.0, &ProbeSkin::whole(&pos, &tris), &body, 500, 3), 1.0);
     // Beyond reach: nothing.
-    assert_eq!(coverage(&cover, 0.05, &pos, &tris, 500, 3), 0.0);
+    assert_eq!(coverage(&cover, 0.05, &ProbeSkin::whole(&pos, &tris), &body, 500, 3), 0.0);
     // A feather over the x > 0 half only (a wide kite whose root is at x = 0).
     let half = RootFrame::from_normal_and_direction(Vec3::new(0.0, 0.0, 0.1), Vec3::Z, Vec3::X).unwrap();
     let kite = FeatherShape { length: 4.0, width: 40.0, thickness: 0.01, vane_split: 0.01 };
-    let c = coverage(&[feather_triangles(&half, &kite, FeatherPose::default())], 1.0, &pos, &tris, 4000, 9);
+    let c = coverage(
+        &[feather_triangles(&half, &kite, FeatherPose::default())],
+        1.0,
+        &ProbeSkin::whole(&pos, &tris),
+        &body,
+        4000,
+        9,
+    );
     assert!((c - 0.5).abs() < 0.05, "half coverage {c}");
 }
 
@@ -293,7 +300,7 @@ fn validation_is_the_same_at_1_2_and_4_threads() {
     let (pos, mesh, body) = plane_body(6.0);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| validate(&tris, &frames, &shapes, &poses, &body, &pos, &mesh, 2000, 4))
+        pool.install(|| validate(&tris, &frames, &shapes, &poses, &body, &ProbeSkin::whole(&pos, &mesh), 2000, 4))
     };
     let one = run(1);
     assert!(!one.intersecting_pairs.is_empty() && !one.body_penetrations.is_empty());

@@ -26,6 +26,8 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, body_penetrations)) j["body_penetrations"] = v.body_penetrations;
     if (PLUMAGE_FILLED(v, coverage)) put(j, "coverage", v.coverage);
     if (PLUMAGE_FILLED(v, mean_pitch_deg)) put(j, "mean_pitch_deg", v.mean_pitch_deg);
+    if (PLUMAGE_FILLED(v, probes)) j["coverage_probes"] = v.probes;
+    if (PLUMAGE_FILLED(v, buried_probes)) j["buried_probes"] = v.buried_probes;
 }
 
 // The memory figures, shared by `memory` and each frame.

@@ -212,6 +212,9 @@ int builtin() {
     const json r = dress("builtin", {"--frames", "3", "--validate", "every"}, 3);
     CHECK(r.value("input", "") == "builtin:procedural_body");
     CHECK(r.value("triangles", 0) == 6016);
+    // The validation reaches the report with the probes behind coverage.
+    const json& f = r["frames"][2];
+    CHECK(f.value("coverage_probes", 0) > 0 && f.contains("buried_probes") && f.contains("coverage"));
     check_memory(r);
     return 0;
 }

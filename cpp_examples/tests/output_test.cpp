@@ -212,7 +212,7 @@ void report_partial_struct() {
     r.add_frame(0, 0.0, 0.001, s, v);
     const json f = r.to_json()["frames"][0];
     CHECK(f["adjusted"] == 5 && !f.contains("collision_tests_per_feather") && !f.contains("priority_changes"));
-    CHECK(f["intersecting_pairs"] == 2 && f["body_penetrations"] == 1 && !f.contains("coverage"));
+    CHECK(f["intersecting_pairs"] == 2 && f["body_penetrations"] == 1 && !f.contains("coverage") && !f.contains("buried_probes"));
 }
 
 void report_summary() {
@@ -226,12 +226,15 @@ void report_summary() {
         v.intersecting_pairs = static_cast<uint64_t>(1 + 4 * k);
         v.coverage = 0.9 - 0.1 * k;
         v.mean_pitch_deg = std::nan("");  // not JSON: left out
+        v.probes = 100;
+        v.buried_probes = static_cast<uint64_t>(k);
         r.add_frame(static_cast<size_t>(k), k / 30.0, 0.002, s, v);
     }
     const json sum = r.to_json()["summary"];
     CHECK(sum["frames"] == 2 && sum["mean_adjusted"] == 3.0 && sum["max_intersecting_pairs"] == 5);
     CHECK(std::fabs(sum["min_coverage"].get<double>() - 0.8) < 1e-12 && std::fabs(sum["mean_step_seconds"].get<double>() - 0.002) < 1e-12);
     CHECK(!r.to_json()["frames"][0].contains("mean_pitch_deg"));
+    CHECK(r.to_json()["frames"][1]["coverage_probes"] == 100 && r.to_json()["frames"][1]["buried_probes"] == 1);
     CHECK(tidy(0.1f) == 0.1 && tidy(0.6f) == 0.6);
 }
 

@@ -378,6 +378,8 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
             body_penetrations: r.body_penetrations as u64,
             coverage: r.coverage,
             mean_pitch_deg: r.mean_pitch_deg,
+            probes: r.probes as u64,
+            buried_probes: r.buried_probes as u64,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
         unsafe { write_versioned(out, std::mem::size_of::<PlumageValidation>(), value, "PlumageValidation") }

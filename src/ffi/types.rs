@@ -527,10 +527,19 @@ pub struct PlumageValidation {
     pub intersecting_pairs: u64,
     /// Feathers crossing the body more than 5 % of their length from the root.
     pub body_penetrations: u64,
-    /// Fraction of surface probes whose normal ray meets a feather.
+    /// Fraction of the probes of the feathered, visible skin whose normal
+    /// ray meets a feather within the longest feather length. Bare skin
+    /// (spacing multiplier 0) and skin buried inside the body (where the
+    /// mesh passes through itself) carry no probes.
     pub coverage: f64,
     /// Mean pitch of the feathers, degrees.
     pub mean_pitch_deg: f64,
+    /// Probes behind `coverage` (appended; a shorter, older struct is
+    /// filled up to its `struct_size`).
+    pub probes: u64,
+    /// Probes of the feathered skin left out of `coverage` because they lie
+    /// inside the body.
+    pub buried_probes: u64,
 }
 
 // Every struct the library copies out must be free of padding, so that the
@@ -541,5 +550,5 @@ const _: () = {
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 15);
-    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 4);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 6);
 };

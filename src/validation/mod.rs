@@ -3,15 +3,17 @@
 //! answer for any thread count: pairs and indices come out sorted, counts
 //! are integers and sums run in index order.
 
+mod coverage;
 mod tri_tri;
+
+pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
 
 use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
-use crate::body::{Aabb, BodyIndex, TriangleGrid, ray_triangle};
+use crate::body::{Aabb, BodyIndex, TriangleGrid};
 use crate::feather::{FeatherPose, FeatherShape, shaft_direction};
 use crate::geometry::RootFrame;
-use crate::rng::Rng;
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -26,19 +28,23 @@ pub struct Validation {
     pub intersecting_pairs: Vec<(u32, u32)>,
     /// Feathers crossing the body more than 5 % of their length from the root, sorted.
     pub body_penetrations: Vec<u32>,
-    /// Fraction of surface probes whose normal ray meets a feather within
-    /// the longest feather length.
+    /// Fraction of the probes of the feathered, visible skin whose normal
+    /// ray meets a feather within the longest feather length.
     pub coverage: f64,
-    /// Number of probes behind `coverage`.
+    /// Probes behind `coverage`: those drawn on the feathered skin, less
+    /// the ones buried inside the body.
     pub probes: usize,
+    /// Probes drawn on the feathered skin but buried inside the body (where
+    /// the mesh passes through itself), left out of `coverage`.
+    pub buried_probes: usize,
     /// Mean pitch, degrees.
     pub mean_pitch_deg: f64,
 }
 
 /// Runs every check. `feather_triangles[i]` are feather i's triangles at
 /// `poses[i]` (as [`crate::feather::feather_triangles`] gives them); the
-/// probe surface is the mesh (`positions`, `triangles`), usually the body
-/// at the same pose; `probes` probe points are placed with `seed`.
+/// coverage probes are drawn on `skin`, usually the body at the same pose;
+/// `probes` probe points are drawn with `seed`.
 #[allow(clippy::too_many_arguments)]
 pub fn validate(
     feather_triangles: &[[[Vec3; 3]; 2]],
@@ -46,20 +52,34 @@ pub fn validate(
     shapes: &[FeatherShape],
     poses: &[FeatherPose],
     body: &BodyIndex,
-    positions: &[Vec3],
-    triangles: &[[u32; 3]],
+    skin: &ProbeSkin<'_>,
     probes: usize,
     seed: u64,
 ) -> Validation {
     let grid = feather_grid(feather_triangles);
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
+    let coverage = count_covered(&grid, longest, skin, body, probes, seed);
     Validation {
         intersecting_pairs: intersecting_pairs_in(&grid),
         body_penetrations: body_penetrations(frames, shapes, poses, body),
-        coverage: coverage_in(&grid, longest, positions, triangles, probes, seed),
-        probes,
+        coverage: coverage.fraction(),
+        probes: coverage.probes,
+        buried_probes: coverage.buried,
         mean_pitch_deg: mean_pitch_deg(poses),
     }
+}
+
+/// Fraction of the probes of `skin` outside `body` whose normal ray meets
+/// one of `feather_triangles` within `reach` (see [`count_covered`]).
+pub fn coverage(
+    feather_triangles: &[[[Vec3; 3]; 2]],
+    reach: f32,
+    skin: &ProbeSkin<'_>,
+    body: &BodyIndex,
+    probes: usize,
+    seed: u64,
+) -> f64 {
+    count_covered(&feather_grid(feather_triangles), reach, skin, body, probes, seed).fraction()
 }
 
 /// A grid over every feather triangle; triangle `2i + k` is triangle `k`
@@ -321,74 +341,6 @@ fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -
     Some((p - nearest.point).dot(normal) < 0.0)
 }
 
-/// Fraction of `probes` random surface points (area-weighted, placed with
-/// `seed`) whose normal ray meets a feather triangle within `reach`. The
-/// normal is the interpolated area-weighted vertex normal.
-pub fn coverage(
-    feather_triangles: &[[[Vec3; 3]; 2]],
-    reach: f32,
-    positions: &[Vec3],
-    triangles: &[[u32; 3]],
-    probes: usize,
-    seed: u64,
-) -> f64 {
-    coverage_in(&feather_grid(feather_triangles), reach, positions, triangles, probes, seed)
-}
-
-fn coverage_in(
-    grid: &TriangleGrid,
-    reach: f32,
-    positions: &[Vec3],
-    triangles: &[[u32; 3]],
-    probes: usize,
-    seed: u64,
-) -> f64 {
-    let points = surface_probes(positions, triangles, probes, seed);
-    if points.is_empty() {
-        return 0.0;
-    }
-    let covered: Vec<bool> = points
-        .par_iter()
-        .map(|&(p, n)| grid.ray_cast(p, n, reach, |t| ray_triangle(p, n, grid.corners(t))).is_some())
-        .collect();
-    covered.iter().filter(|&&c| c).count() as f64 / points.len() as f64
-}
-
-/// `count` area-weighted random points of the mesh with their
-/// interpolated unit normals.
-pub fn surface_probes(positions: &[Vec3], triangles: &[[u32; 3]], count: usize, seed: u64) -> Vec<(Vec3, Vec3)> {
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    let mut cumulative = Vec::with_capacity(triangles.len());
-    let mut total = 0.0f64;
-    for t in triangles {
-        let [a, b, c] = t.map(|v| positions[v as usize]);
-        let area2 = (b - a).cross(c - a);
-        for &v in t {
-            normals[v as usize] += area2;
-        }
-        total += 0.5 * area2.length() as f64;
-        cumulative.push(total);
-    }
-    if total <= 0.0 || total.is_nan() {
-        return Vec::new();
-    }
-    let mut rng = Rng::new(seed);
-    (0..count)
-        .map(|_| {
-            let target = rng.next_f64() * total;
-            let t = cumulative.partition_point(|&c| c <= target).min(triangles.len() - 1);
-            let (r1, r2) = (rng.next_f32().sqrt(), rng.next_f32());
-            let w = [1.0 - r1, r1 * (1.0 - r2), r1 * r2];
-            let tri = triangles[t];
-            let p = (0..3).map(|k| positions[tri[k] as usize] * w[k]).sum::<Vec3>();
-            let [a, b, c] = tri.map(|v| positions[v as usize]);
-            let face = (b - a).cross(c - a).normalize_or_zero();
-            let n = (0..3).map(|k| normals[tri[k] as usize].normalize_or_zero() * w[k]).sum::<Vec3>();
-            (p, n.try_normalize().unwrap_or(face))
-        })
-        .collect()
-}
-
 /// Mean pitch in degrees (summed in index order).
 pub fn mean_pitch_deg(poses: &[FeatherPose]) -> f64 {
     if poses.is_empty() {
@@ -412,16 +364,5 @@ mod tests {
         let (whole, cut_off) = (10.0, 0.25);
         assert!((area - (whole - cut_off)).abs() < 1e-4, "{area}");
         assert!(out.iter().flatten().all(|p| p.x >= 1.0 - 1e-6));
-    }
-
-    #[test]
-    fn probes_lie_on_the_mesh_with_its_normal() {
-        let pos = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
-        let probes = surface_probes(&pos, &[[0, 1, 2], [0, 2, 3]], 100, 5);
-        assert_eq!(probes.len(), 100);
-        for (p, n) in probes {
-            assert!(p.z.abs() < 1e-6 && (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y));
-            assert!((n - Vec3::Z).length() < 1e-5);
-        }
     }
 }

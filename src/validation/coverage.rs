@@ -1,0 +1,274 @@
+//! The coverage figure (DESIGN.md §6): how much of the feathered, visible
+//! skin has a feather over it.
+//!
+//! Probes are area-weighted random points of the skin. Two kinds of skin
+//! are left out, because no collision-free coat could cover them:
+//! - **bare skin**, where the caller's spacing multiplier is 0 (the same
+//!   rule as root sampling: a point is bare where its bare corners weigh
+//!   more than ½);
+//! - **skin buried inside the body**, where the mesh passes through itself
+//!   (a wing's root inside the torso, a belly poking through the wing's
+//!   underside). A feather covering such a probe would have to lie inside
+//!   the body.
+
+use crate::body::{BodyIndex, TriangleGrid, ray_triangle};
+use crate::rng::Rng;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// The skin the coverage probes are drawn from.
+#[derive(Clone, Copy, Debug)]
+pub struct ProbeSkin<'a> {
+    /// Vertex positions at the pose being validated.
+    pub positions: &'a [Vec3],
+    /// Triangles (indices into `positions`).
+    pub triangles: &'a [[u32; 3]],
+    /// Per vertex: whether it carries feathers. Empty means every vertex does.
+    pub feathered: &'a [bool],
+}
+
+impl<'a> ProbeSkin<'a> {
+    /// A skin feathered everywhere.
+    pub fn whole(positions: &'a [Vec3], triangles: &'a [[u32; 3]]) -> Self {
+        Self { positions, triangles, feathered: &[] }
+    }
+
+    fn is_feathered(&self, v: u32) -> bool {
+        self.feathered.is_empty() || self.feathered[v as usize]
+    }
+
+    /// The feathered share of the point with barycentric weights `w` on
+    /// triangle `tri`: the weight of its feathered corners.
+    fn presence(&self, tri: [u32; 3], w: [f32; 3]) -> f32 {
+        (0..3).filter(|&k| self.is_feathered(tri[k])).map(|k| w[k]).sum()
+    }
+}
+
+/// A probe: a point of the skin and its unit normal.
+pub type Probe = (Vec3, Vec3);
+
+/// What the coverage figure counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CoverageCount {
+    /// Probes on the feathered, visible skin.
+    pub probes: usize,
+    /// Of those, probes whose normal ray meets a feather within the reach.
+    pub covered: usize,
+    /// Probes drawn on the feathered skin but buried inside the body.
+    pub buried: usize,
+}
+
+impl CoverageCount {
+    /// `covered / probes` (0 without probes).
+    pub fn fraction(&self) -> f64 {
+        if self.probes == 0 { 0.0 } else { self.covered as f64 / self.probes as f64 }
+    }
+}
+
+/// Draws `count` probes on the feathered skin with `seed`, leaves out those
+/// buried inside `body` and counts those whose normal ray meets a triangle
+/// of `feathers` within `reach`.
+pub fn count_covered(
+    feathers: &TriangleGrid,
+    reach: f32,
+    skin: &ProbeSkin<'_>,
+    body: &BodyIndex,
+    count: usize,
+    seed: u64,
+) -> CoverageCount {
+    let drawn = surface_probes(skin, count, seed);
+    let interior = BodyInterior::new(body);
+    let outcome: Vec<(bool, bool)> = drawn
+        .par_iter()
+        .map(|&(p, n)| {
+            if interior.holds_probe(p, n) {
+                (true, false)
+            } else {
+                (false, feathers.ray_cast(p, n, reach, |t| ray_triangle(p, n, feathers.corners(t))).is_some())
+            }
+        })
+        .collect();
+    let buried = outcome.iter().filter(|o| o.0).count();
+    CoverageCount { probes: drawn.len() - buried, covered: outcome.iter().filter(|o| o.1).count(), buried }
+}
+
+/// Up to `count` area-weighted random points of the feathered skin with
+/// their interpolated unit normals (the area-weighted vertex normals): the
+/// points are drawn on the triangles with a feathered corner and the bare
+/// ones are dropped, so fewer than `count` come back where the skin is
+/// partly bare.
+pub fn surface_probes(skin: &ProbeSkin<'_>, count: usize, seed: u64) -> Vec<Probe> {
+    let (positions, triangles) = (skin.positions, skin.triangles);
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    let mut cumulative = Vec::with_capacity(triangles.len());
+    let mut total = 0.0f64;
+    for t in triangles {
+        let [a, b, c] = t.map(|v| positions[v as usize]);
+        let area2 = (b - a).cross(c - a);
+        for &v in t {
+            normals[v as usize] += area2;
+        }
+        if t.iter().any(|&v| skin.is_feathered(v)) {
+            total += 0.5 * area2.length() as f64;
+        }
+        cumulative.push(total);
+    }
+    if total <= 0.0 || total.is_nan() {
+        return Vec::new();
+    }
+    let mut rng = Rng::new(seed);
+    (0..count)
+        .filter_map(|_| {
+            let target = rng.next_f64() * total;
+            let t = cumulative.partition_point(|&c| c <= target).min(triangles.len() - 1);
+            let (r1, r2) = (rng.next_f32().sqrt(), rng.next_f32());
+            let w = [1.0 - r1, r1 * (1.0 - r2), r1 * r2];
+            let tri = triangles[t];
+            if skin.presence(tri, w) < 0.5 {
+                return None;
+            }
+            let p = (0..3).map(|k| positions[tri[k] as usize] * w[k]).sum::<Vec3>();
+            let [a, b, c] = tri.map(|v| positions[v as usize]);
+            let face = (b - a).cross(c - a).normalize_or_zero();
+            let n = (0..3).map(|k| normals[tri[k] as usize].normalize_or_zero() * w[k]).sum::<Vec3>();
+            Some((p, n.try_normalize().unwrap_or(face)))
+        })
+        .collect()
+}
+
+/// Offset of the point whose winding number is measured, off the probe
+/// along its normal, as a fraction of the body's extent: far enough that
+/// the probe's own triangle is not crossed, close enough to stay within
+/// the thinnest parts of the test models (wings 2 % of the extent thick).
+const WINDING_OFFSET: f32 = 1e-5;
+
+/// Tilt of the two extra winding rays away from the normal (tangent of the
+/// angle). Three rays vote, so a ray grazing an edge cannot decide alone.
+const WINDING_RAY_TILT: f32 = 0.5;
+
+/// Whether the probe `p` (unit normal `n`) lies inside `body` (see
+/// [`BodyInterior::holds_probe`]).
+pub fn is_buried(body: &BodyIndex, p: Vec3, n: Vec3) -> bool {
+    BodyInterior::new(body).holds_probe(p, n)
+}
+
+/// The inside of a body mesh, found by winding numbers.
+struct BodyInterior<'a> {
+    body: &'a BodyIndex,
+    /// How far off the skin a probe's winding number is measured.
+    offset: f32,
+}
+
+impl<'a> BodyInterior<'a> {
+    fn new(body: &'a BodyIndex) -> Self {
+        Self { body, offset: WINDING_OFFSET * body_extent(body.grid()).unwrap_or(0.0) }
+    }
+
+    /// Whether the probe `p` (unit normal `n`) lies inside the body: the
+    /// point just off it along `n` has a winding number of at least 1 for
+    /// the body's triangles. The winding number along a ray is the number
+    /// of triangles the ray leaves the body through less the number it
+    /// enters through; it is the same for every ray of a closed mesh, and a
+    /// majority of three rays decides where one grazes an edge or the mesh
+    /// is open.
+    fn holds_probe(&self, p: Vec3, n: Vec3) -> bool {
+        if self.body.triangle_count() == 0 {
+            return false;
+        }
+        let origin = p + n * self.offset;
+        let (u, v) = n.any_orthonormal_pair();
+        let rays = [n, (n + u * WINDING_RAY_TILT).normalize(), (n - v * WINDING_RAY_TILT).normalize()];
+        rays.iter().filter(|&&dir| winding_along_ray(self.body, origin, dir) >= 1).count() >= 2
+    }
+}
+
+/// The diagonal of the box around every body corner, or `None` without
+/// triangles.
+fn body_extent(grid: &TriangleGrid) -> Option<f32> {
+    let corners = grid.all_corners();
+    let first = corners.first()?[0];
+    let (lo, hi) = corners.iter().flatten().fold((first, first), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+    Some((hi - lo).length())
+}
+
+/// Triangles leaving the body along the ray less triangles entering it
+/// (each triangle counted once; a triangle whose plane holds the ray
+/// counts for neither).
+fn winding_along_ray(body: &BodyIndex, origin: Vec3, dir: Vec3) -> i32 {
+    let grid = body.grid();
+    let mut crossed: Vec<u32> = Vec::new();
+    grid.ray_cast(origin, dir, f32::INFINITY, |t| {
+        if ray_triangle(origin, dir, grid.corners(t)).is_some() {
+            crossed.push(t);
+        }
+        None
+    });
+    crossed.sort_unstable();
+    crossed.dedup();
+    crossed.iter().map(|&t| body.normal(t).dot(dir).signum() as i32).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An axis-aligned box, triangles wound outwards.
+    fn cuboid(lo: Vec3, hi: Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let p = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        (p, tris)
+    }
+
+    #[test]
+    fn probes_lie_on_the_mesh_with_its_normal() {
+        let pos = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let probes = surface_probes(&ProbeSkin::whole(&pos, &[[0, 1, 2], [0, 2, 3]]), 100, 5);
+        assert_eq!(probes.len(), 100);
+        for (p, n) in probes {
+            assert!(p.z.abs() < 1e-6 && (0.0..=1.0).contains(&p.x) && (0.0..=1.0).contains(&p.y));
+            assert!((n - Vec3::Z).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn bare_skin_gets_no_probes() {
+        // Two squares side by side; the right one's far corners are bare.
+        let pos =
+            [0.0, 1.0, 2.0].iter().flat_map(|&x| [Vec3::new(x, 0.0, 0.0), Vec3::new(x, 1.0, 0.0)]).collect::<Vec<_>>();
+        let tris = [[0, 2, 3], [0, 3, 1], [2, 4, 5], [2, 5, 3]];
+        let feathered = [true, true, true, true, false, false];
+        let probes = surface_probes(&ProbeSkin { positions: &pos, triangles: &tris, feathered: &feathered }, 4000, 9);
+        assert!(probes.iter().all(|(p, _)| p.x <= 1.5 + 1e-5), "a probe on the bare half");
+        // The feathered square and the half of the next one nearest to it.
+        let share = probes.len() as f64 / 4000.0;
+        assert!((share - 0.75).abs() < 0.03, "{share}");
+    }
+
+    #[test]
+    fn skin_inside_another_part_is_buried() {
+        // A slab passing through a box: the slab's skin inside the box is
+        // buried, the rest of both is visible.
+        let (mut pos, mut tris) = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let (slab_pos, slab_tris) = cuboid(Vec3::new(-3.0, -0.2, -0.5), Vec3::new(3.0, 0.2, 0.5));
+        let base = pos.len() as u32;
+        pos.extend(slab_pos);
+        tris.extend(slab_tris.iter().map(|t| t.map(|v| v + base)));
+        let body = BodyIndex::from_mesh(&pos, &tris);
+        let up = Vec3::Y;
+        assert!(is_buried(&body, Vec3::new(0.0, 0.2, 0.0), up), "slab top inside the box");
+        assert!(!is_buried(&body, Vec3::new(2.0, 0.2, 0.0), up), "slab top outside the box");
+        assert!(!is_buried(&body, Vec3::new(0.5, 1.0, 0.5), up), "box top");
+        assert!(is_buried(&body, Vec3::new(1.0, 0.0, 0.2), Vec3::X), "box side inside the slab");
+        assert!(!is_buried(&body, Vec3::new(1.0, 0.5, 0.0), Vec3::X), "box side above the slab");
+        assert!(is_buried(&body, Vec3::new(0.5, 0.0, 0.5), Vec3::Z), "slab side inside the box");
+    }
+}
