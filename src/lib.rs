@@ -18,6 +18,7 @@ pub mod feather;
 pub mod ffi;
 pub mod field;
 pub mod geometry;
+pub mod interior;
 pub mod mesh;
 pub mod ordering;
 pub mod pool;

@@ -5,11 +5,10 @@
 //!
 //! Intersecting pairs and body penetrations must be exactly 0. Coverage
 //! (over the visible skin: the bird's belly passes through its wings, and
-//! the Flamingo's legs and neck through its body, and the skin buried there
-//! carries no probes) is asserted a little below the level reached today;
-//! the target is 0.95, met by the sphere (0.988), the torus (0.989)
-//! and the Fox (0.962), not yet by the Flamingo (0.903) or the bird
-//! (0.876). What is left bare there: the rims of thin wings and the thin
+//! the skin buried there carries neither roots nor probes) is asserted a
+//! little below the level reached today; the target is 0.95, met by
+//! the sphere (0.988), the torus (0.989) and the Fox (0.962), not yet by
+//! the Flamingo (0.907) or the bird (0.880). What is left bare there: the rims of thin wings and the thin
 //! legs (a flat feather over a wing lies parallel to the rim's normal, and
 //! the probes' rays there leave the coat between the two skins' feathers),
 //! feathers pitched up on thin limbs and at wing roots, and feathers
@@ -111,9 +110,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
 #[test]
 fn shared_models_at_rest_are_collision_free() {
     let models = [
-        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.895),
+        ("Flamingo.glb", 2000, Vec3::new(0.0, 0.0, 100.4), 0.9),
         ("Fox.glb", 4000, Vec3::new(0.0, 1.36, 1.69), 0.955),
-        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.87),
+        ("bird.glb", 800, Vec3::new(0.0, -0.02, -0.21), 0.875),
     ];
     for (file, feathers, head, min_coverage) in models {
         let Some(shape) = load_model(file) else { continue };

@@ -9,6 +9,7 @@
 use super::grid::StaticGrid;
 use crate::field::Fields;
 use crate::geometry::{RootFrame, SurfacePoint};
+use crate::interior::{BuriedSkin, FaceBurial};
 use crate::rng::hash64;
 use crate::roots::{RootBinding, RootNormal, pose_roots};
 use crate::surface::{NearbyPatch, Surface};
@@ -65,6 +66,7 @@ pub fn sampling_metrics(
     surface: &Surface,
     positions: &[Vec3],
     fields: &Fields,
+    buried: &BuriedSkin,
     roots: &[RootBinding],
     spacing: f32,
     theta: f32,
@@ -83,8 +85,17 @@ pub fn sampling_metrics(
     let (sum, count) = per_root.iter().fold((0.0f64, 0u64), |(s, c), r| (s + r.1, c + r.2 as u64));
     let alignment = if count > 0 { (sum / count as f64) as f32 } else { 0.0 };
 
-    let coverage =
-        CoverageContext { surface, positions, normals: &normals, fields, grid: &grid, frames: &frames, roots, spacing };
+    let coverage = CoverageContext {
+        surface,
+        positions,
+        normals: &normals,
+        fields,
+        buried,
+        grid: &grid,
+        frames: &frames,
+        roots,
+        spacing,
+    };
     let per_face: Vec<(f32, usize)> = (0..surface.face_count())
         .into_par_iter()
         .map_init(|| (NearbyPatch::new(surface), Vec::new()), |(patch, near), f| coverage.face(patch, near, f))
@@ -148,6 +159,7 @@ struct CoverageContext<'a> {
     positions: &'a [Vec3],
     normals: &'a [Vec3],
     fields: &'a Fields,
+    buried: &'a BuriedSkin,
     grid: &'a StaticGrid,
     frames: &'a [RootFrame],
     roots: &'a [RootBinding],
@@ -165,6 +177,9 @@ impl CoverageContext<'_> {
         else {
             return (0.0, 0);
         };
+        if self.buried.face(f) == FaceBurial::Buried {
+            return (0.0, 0);
+        }
         let corners = self.surface.corners(self.positions, f);
         let [a, b, c] = corners;
         let area = 0.5 * (b - a).cross(c - a).length();
@@ -184,6 +199,12 @@ impl CoverageContext<'_> {
         for i in 0..count {
             let point = SurfacePoint { face: f as u32, bary: probe_bary(f, i) };
             let Some(scale) = self.fields.spacing_scale_at(self.surface, point) else { continue };
+            if self.buried.face(f) == FaceBurial::Crossed {
+                let normal = self.surface.interpolated_normal(self.positions, self.normals, point);
+                if self.buried.holds(f, self.surface.position(self.positions, point), normal) {
+                    continue;
+                }
+            }
             let local_d = self.spacing * scale;
             let mut nearest = f32::INFINITY;
             for reach in [GAP_FIRST_REACH, GAP_CAP] {

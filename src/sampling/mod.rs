@@ -27,6 +27,7 @@ pub use metrics::{SamplingMetrics, sampling_metrics};
 use crate::config::{Config, SamplerKind};
 use crate::error::{Error, ErrorKind, Result};
 use crate::field::Fields;
+use crate::interior::BuriedSkin;
 use crate::mesh::WeldedMesh;
 use crate::progress::{Phase, Progress};
 use crate::rng::Rng;
@@ -95,7 +96,8 @@ pub fn sample_roots_with_progress(
     let positions = &mesh.positions;
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
-    let density = DensityField::new(surface, fields, positions, &normals);
+    let buried = BuriedSkin::new(positions, &mesh.triangles);
+    let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
     let (spacing, pool, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
@@ -113,7 +115,7 @@ pub fn sample_roots_with_progress(
         None => Vec::new(),
     };
     let seconds = start.elapsed().as_secs_f64();
-    let metrics = sampling_metrics(surface, positions, fields, &roots, spacing, config.theta);
+    let metrics = sampling_metrics(surface, positions, fields, &buried, &roots, spacing, config.theta);
     Ok(Sampling { roots, spacing, metrics, seconds })
 }
 

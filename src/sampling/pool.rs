@@ -10,6 +10,7 @@
 use super::grid::{DynamicGrid, StaticGrid};
 use crate::field::Fields;
 use crate::geometry::SurfacePoint;
+use crate::interior::{BuriedSkin, FaceBurial};
 use crate::rng::Rng;
 use crate::surface::{NearbyPatch, Surface};
 use glam::Vec3;
@@ -58,10 +59,18 @@ pub(crate) struct DensityField<'a> {
     min_scale: Vec<f32>,
     /// `∫ 1/s² dA` over the feathered surface: roots ≈ this / d² × packing.
     effective_area: f64,
+    /// Skin buried inside the body: no pool points there.
+    buried: &'a BuriedSkin,
 }
 
 impl<'a> DensityField<'a> {
-    pub(crate) fn new(surface: &'a Surface, fields: &'a Fields, positions: &'a [Vec3], normals: &'a [Vec3]) -> Self {
+    pub(crate) fn new(
+        surface: &'a Surface,
+        fields: &'a Fields,
+        positions: &'a [Vec3],
+        normals: &'a [Vec3],
+        buried: &'a BuriedSkin,
+    ) -> Self {
         let scales = fields.vertex_spacing_scales();
         let mut cdf = Vec::with_capacity(surface.face_count());
         let mut min_scale = Vec::with_capacity(surface.face_count());
@@ -73,7 +82,7 @@ impl<'a> DensityField<'a> {
             };
             let feathered: Vec<f32> = tri.iter().map(|&v| scales[v as usize]).filter(|&s| s > 0.0).collect();
             let lo = feathered.iter().copied().fold(f32::INFINITY, f32::min);
-            if feathered.is_empty() || area.is_nan() || area <= 0.0 {
+            if feathered.is_empty() || area.is_nan() || area <= 0.0 || buried.face(f) == FaceBurial::Buried {
                 min_scale.push(0.0);
             } else {
                 let mean_inv2 =
@@ -84,7 +93,7 @@ impl<'a> DensityField<'a> {
             }
             cdf.push(total);
         }
-        Self { surface, fields, positions, normals, cdf, min_scale, effective_area }
+        Self { surface, fields, positions, normals, cdf, min_scale, effective_area, buried }
     }
 
     /// `∫ 1/s² dA` over the feathered part of the surface.
@@ -130,13 +139,12 @@ impl<'a> DensityField<'a> {
             if accept_u >= ratio * ratio {
                 continue;
             }
-            out.push(PoolPoint {
-                position: self.surface.position(self.positions, point),
-                normal: self.surface.interpolated_normal(self.positions, self.normals, point),
-                face: face as u32,
-                bary: point.bary,
-                spacing: d * scale,
-            });
+            let position = self.surface.position(self.positions, point);
+            let normal = self.surface.interpolated_normal(self.positions, self.normals, point);
+            if self.buried.holds(face, position, normal) {
+                continue;
+            }
+            out.push(PoolPoint { position, normal, face: face as u32, bary: point.bary, spacing: d * scale });
         }
         out
     }

@@ -7,11 +7,11 @@
 //!   rule as root sampling: a point is bare where its bare corners weigh
 //!   more than ½);
 //! - **skin buried inside the body**, where the mesh passes through itself
-//!   (a wing's root inside the torso, a belly poking through the wing's
-//!   underside). A feather covering such a probe would have to lie inside
-//!   the body.
+//!   (see [`crate::interior`]). A feather covering such a probe would have
+//!   to lie inside the body.
 
 use crate::body::{BodyIndex, TriangleGrid, ray_triangle};
+use crate::interior::BodyInterior;
 use crate::rng::Rng;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -81,7 +81,7 @@ pub fn count_covered(
     let outcome: Vec<(bool, bool)> = drawn
         .par_iter()
         .map(|&(p, n)| {
-            if interior.holds_probe(p, n) {
+            if interior.holds(p, n) {
                 (true, false)
             } else {
                 (false, feathers.ray_cast(p, n, reach, |t| ray_triangle(p, n, feathers.corners(t))).is_some())
@@ -136,97 +136,15 @@ pub fn surface_probes(skin: &ProbeSkin<'_>, count: usize, seed: u64) -> Vec<Prob
         .collect()
 }
 
-/// Offset of the point whose winding number is measured, off the probe
-/// along its normal, as a fraction of the body's extent: far enough that
-/// the probe's own triangle is not crossed, close enough to stay within
-/// the thinnest parts of the test models (wings 2 % of the extent thick).
-const WINDING_OFFSET: f32 = 1e-5;
-
-/// Tilt of the two extra winding rays away from the normal (tangent of the
-/// angle). Three rays vote, so a ray grazing an edge cannot decide alone.
-const WINDING_RAY_TILT: f32 = 0.5;
-
 /// Whether the probe `p` (unit normal `n`) lies inside `body` (see
-/// [`BodyInterior::holds_probe`]).
+/// [`BodyInterior::holds`]).
 pub fn is_buried(body: &BodyIndex, p: Vec3, n: Vec3) -> bool {
-    BodyInterior::new(body).holds_probe(p, n)
-}
-
-/// The inside of a body mesh, found by winding numbers.
-struct BodyInterior<'a> {
-    body: &'a BodyIndex,
-    /// How far off the skin a probe's winding number is measured.
-    offset: f32,
-}
-
-impl<'a> BodyInterior<'a> {
-    fn new(body: &'a BodyIndex) -> Self {
-        Self { body, offset: WINDING_OFFSET * body_extent(body.grid()).unwrap_or(0.0) }
-    }
-
-    /// Whether the probe `p` (unit normal `n`) lies inside the body: the
-    /// point just off it along `n` has a winding number of at least 1 for
-    /// the body's triangles. The winding number along a ray is the number
-    /// of triangles the ray leaves the body through less the number it
-    /// enters through; it is the same for every ray of a closed mesh, and a
-    /// majority of three rays decides where one grazes an edge or the mesh
-    /// is open.
-    fn holds_probe(&self, p: Vec3, n: Vec3) -> bool {
-        if self.body.triangle_count() == 0 {
-            return false;
-        }
-        let origin = p + n * self.offset;
-        let (u, v) = n.any_orthonormal_pair();
-        let rays = [n, (n + u * WINDING_RAY_TILT).normalize(), (n - v * WINDING_RAY_TILT).normalize()];
-        rays.iter().filter(|&&dir| winding_along_ray(self.body, origin, dir) >= 1).count() >= 2
-    }
-}
-
-/// The diagonal of the box around every body corner, or `None` without
-/// triangles.
-fn body_extent(grid: &TriangleGrid) -> Option<f32> {
-    let corners = grid.all_corners();
-    let first = corners.first()?[0];
-    let (lo, hi) = corners.iter().flatten().fold((first, first), |(lo, hi), &c| (lo.min(c), hi.max(c)));
-    Some((hi - lo).length())
-}
-
-/// Triangles leaving the body along the ray less triangles entering it
-/// (each triangle counted once; a triangle whose plane holds the ray
-/// counts for neither).
-fn winding_along_ray(body: &BodyIndex, origin: Vec3, dir: Vec3) -> i32 {
-    let grid = body.grid();
-    let mut crossed: Vec<u32> = Vec::new();
-    grid.ray_cast(origin, dir, f32::INFINITY, |t| {
-        if ray_triangle(origin, dir, grid.corners(t)).is_some() {
-            crossed.push(t);
-        }
-        None
-    });
-    crossed.sort_unstable();
-    crossed.dedup();
-    crossed.iter().map(|&t| body.normal(t).dot(dir).signum() as i32).sum()
+    BodyInterior::new(body).holds(p, n)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// An axis-aligned box, triangles wound outwards.
-    fn cuboid(lo: Vec3, hi: Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-        let p = (0..8)
-            .map(|i| {
-                Vec3::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect();
-        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
-        let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
-        (p, tris)
-    }
 
     #[test]
     fn probes_lie_on_the_mesh_with_its_normal() {
@@ -251,24 +169,5 @@ mod tests {
         // The feathered square and the half of the next one nearest to it.
         let share = probes.len() as f64 / 4000.0;
         assert!((share - 0.75).abs() < 0.03, "{share}");
-    }
-
-    #[test]
-    fn skin_inside_another_part_is_buried() {
-        // A slab passing through a box: the slab's skin inside the box is
-        // buried, the rest of both is visible.
-        let (mut pos, mut tris) = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0));
-        let (slab_pos, slab_tris) = cuboid(Vec3::new(-3.0, -0.2, -0.5), Vec3::new(3.0, 0.2, 0.5));
-        let base = pos.len() as u32;
-        pos.extend(slab_pos);
-        tris.extend(slab_tris.iter().map(|t| t.map(|v| v + base)));
-        let body = BodyIndex::from_mesh(&pos, &tris);
-        let up = Vec3::Y;
-        assert!(is_buried(&body, Vec3::new(0.0, 0.2, 0.0), up), "slab top inside the box");
-        assert!(!is_buried(&body, Vec3::new(2.0, 0.2, 0.0), up), "slab top outside the box");
-        assert!(!is_buried(&body, Vec3::new(0.5, 1.0, 0.5), up), "box top");
-        assert!(is_buried(&body, Vec3::new(1.0, 0.0, 0.2), Vec3::X), "box side inside the slab");
-        assert!(!is_buried(&body, Vec3::new(1.0, 0.5, 0.0), Vec3::X), "box side above the slab");
-        assert!(is_buried(&body, Vec3::new(0.5, 0.0, 0.5), Vec3::Z), "slab side inside the box");
     }
 }

@@ -1,0 +1,223 @@
+//! The inside of the body: which parts of the skin are buried where the
+//! mesh passes through itself (a wing's root inside the torso, a belly
+//! poking through the wing's underside, a leg sunk into the body). Nothing
+//! there can be seen, so no root is planted and no coverage probe is drawn
+//! on it.
+//!
+//! A point is inside when its winding number for the body's triangles is
+//! at least 1. Along a ray the winding number is the number of triangles
+//! the ray leaves the body through less the number it enters through; it
+//! is the same for every ray of a closed mesh, and a vote of three rays
+//! settles a ray grazing an edge or a mesh with holes.
+
+use crate::body::{Aabb, BodyIndex, ray_triangle};
+use crate::validation::triangles_intersect;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Offset of the point whose winding number is measured, off the skin
+/// along its normal, as a fraction of the body's extent: far enough that
+/// the skin's own triangle is not crossed, close enough to stay within the
+/// thinnest parts of the test models (wings 2 % of the extent thick).
+const WINDING_OFFSET: f32 = 1e-5;
+
+/// Tilt of the two extra rays away from the normal (tangent of the angle).
+const WINDING_RAY_TILT: f32 = 0.5;
+
+/// How a face of the skin lies with respect to the rest of the body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceBurial {
+    /// Outside the body: visible skin.
+    Visible,
+    /// Wholly inside the body.
+    Buried,
+    /// Crossed by other faces: part visible, part buried (test each point).
+    Crossed,
+}
+
+/// The inside of a body mesh.
+pub struct BodyInterior<'a> {
+    body: &'a BodyIndex,
+    /// How far off the skin a point's winding number is measured.
+    offset: f32,
+}
+
+impl<'a> BodyInterior<'a> {
+    /// The inside of `body` (nothing is inside an empty body).
+    pub fn new(body: &'a BodyIndex) -> Self {
+        Self { body, offset: WINDING_OFFSET * body_extent(body).unwrap_or(0.0) }
+    }
+
+    /// Whether the skin point `p` with unit normal `n` is buried: the point
+    /// just off it along `n` has a winding number of at least 1 for at
+    /// least two of three rays.
+    pub fn holds(&self, p: Vec3, n: Vec3) -> bool {
+        if self.body.triangle_count() == 0 {
+            return false;
+        }
+        let origin = p + n * self.offset;
+        let (u, v) = n.any_orthonormal_pair();
+        let rays = [n, (n + u * WINDING_RAY_TILT).normalize(), (n - v * WINDING_RAY_TILT).normalize()];
+        rays.iter().filter(|&&dir| self.winding_along_ray(origin, dir) >= 1).count() >= 2
+    }
+
+    /// Each of the body's faces (in its index order): visible, buried, or
+    /// crossed by another face. A face meeting no other face lies wholly on
+    /// one side, judged at its centroid; faces sharing a corner are not
+    /// compared (they touch by construction).
+    pub fn face_burials(&self, triangles: &[[u32; 3]]) -> Vec<FaceBurial> {
+        (0..triangles.len())
+            .into_par_iter()
+            .map_init(Vec::new, |nearby, f| {
+                let corners = self.body.corners(f as u32);
+                self.body.triangles_in_box(&Aabb::of_triangle(&corners), nearby);
+                let crossed = nearby.iter().any(|&g| {
+                    let other = triangles[g as usize];
+                    g as usize != f
+                        && !other.iter().any(|v| triangles[f].contains(v))
+                        && triangles_intersect(&corners, &self.body.corners(g))
+                });
+                if crossed {
+                    FaceBurial::Crossed
+                } else {
+                    let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
+                    match self.holds(centroid, self.body.normal(f as u32)) {
+                        true => FaceBurial::Buried,
+                        false => FaceBurial::Visible,
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// Triangles leaving the body along the ray less triangles entering it
+    /// (each triangle counted once; one whose plane holds the ray counts
+    /// for neither).
+    fn winding_along_ray(&self, origin: Vec3, dir: Vec3) -> i32 {
+        let grid = self.body.grid();
+        let mut crossed: Vec<u32> = Vec::new();
+        grid.ray_cast(origin, dir, f32::INFINITY, |t| {
+            if ray_triangle(origin, dir, grid.corners(t)).is_some() {
+                crossed.push(t);
+            }
+            None
+        });
+        crossed.sort_unstable();
+        crossed.dedup();
+        crossed.iter().map(|&t| self.body.normal(t).dot(dir).signum() as i32).sum()
+    }
+}
+
+/// The buried part of a skin: each face's burial, and the winding test for
+/// points of the faces other faces cross.
+pub struct BuriedSkin {
+    body: BodyIndex,
+    offset: f32,
+    faces: Vec<FaceBurial>,
+}
+
+impl BuriedSkin {
+    /// The buried part of the mesh (`positions`, `triangles`) at that pose.
+    pub fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
+        let body = BodyIndex::from_mesh(positions, triangles);
+        let interior = BodyInterior::new(&body);
+        let (offset, faces) = (interior.offset, interior.face_burials(triangles));
+        Self { body, offset, faces }
+    }
+
+    /// How face `f` lies.
+    pub fn face(&self, f: usize) -> FaceBurial {
+        self.faces[f]
+    }
+
+    /// Whether the point `p` (unit normal `n`) of face `f` is buried.
+    pub fn holds(&self, f: usize, p: Vec3, n: Vec3) -> bool {
+        match self.faces[f] {
+            FaceBurial::Visible => false,
+            FaceBurial::Buried => true,
+            FaceBurial::Crossed => BodyInterior { body: &self.body, offset: self.offset }.holds(p, n),
+        }
+    }
+}
+
+/// The diagonal of the box around every body corner, or `None` without
+/// triangles.
+fn body_extent(body: &BodyIndex) -> Option<f32> {
+    let corners = body.grid().all_corners();
+    let first = corners.first()?[0];
+    let (lo, hi) = corners.iter().flatten().fold((first, first), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+    Some((hi - lo).length())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An axis-aligned box, triangles wound outwards.
+    fn cuboid(lo: Vec3, hi: Vec3) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let p = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let tris = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        (p, tris)
+    }
+
+    /// A unit box with a long slab passing through it along x.
+    fn box_and_slab() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let (mut pos, mut tris) = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let (slab_pos, slab_tris) = cuboid(Vec3::new(-3.0, -0.2, -0.5), Vec3::new(3.0, 0.2, 0.5));
+        let base = pos.len() as u32;
+        pos.extend(slab_pos);
+        tris.extend(slab_tris.iter().map(|t| t.map(|v| v + base)));
+        (pos, tris)
+    }
+
+    #[test]
+    fn skin_inside_another_part_is_buried() {
+        let (pos, tris) = box_and_slab();
+        let body = BodyIndex::from_mesh(&pos, &tris);
+        let inside = BodyInterior::new(&body);
+        assert!(inside.holds(Vec3::new(0.0, 0.2, 0.0), Vec3::Y), "slab top inside the box");
+        assert!(!inside.holds(Vec3::new(2.0, 0.2, 0.0), Vec3::Y), "slab top outside the box");
+        assert!(!inside.holds(Vec3::new(0.5, 1.0, 0.5), Vec3::Y), "box top");
+        assert!(inside.holds(Vec3::new(1.0, 0.0, 0.2), Vec3::X), "box side inside the slab");
+        assert!(!inside.holds(Vec3::new(1.0, 0.5, 0.0), Vec3::X), "box side above the slab");
+        assert!(inside.holds(Vec3::new(0.5, 0.0, 0.5), Vec3::Z), "slab side inside the box");
+    }
+
+    #[test]
+    fn faces_crossing_each_other_are_told_apart_from_whole_ones() {
+        let (pos, tris) = box_and_slab();
+        let body = BodyIndex::from_mesh(&pos, &tris);
+        let burials = BodyInterior::new(&body).face_burials(&tris);
+        // The slab's long faces cross the box's ±x sides, and those sides
+        // cross the slab; the box's other faces and the slab's end caps are
+        // whole and outside.
+        let (box_faces, slab_faces) = burials.split_at(12);
+        let side = |faces: &[FaceBurial], quad: usize| [faces[2 * quad], faces[2 * quad + 1]];
+        for quad in [0, 1, 2, 3] {
+            assert!(side(slab_faces, quad).iter().all(|&b| b == FaceBurial::Crossed), "slab quad {quad}");
+            assert!(side(box_faces, quad).iter().all(|&b| b == FaceBurial::Visible), "box quad {quad}");
+        }
+        for quad in [4, 5] {
+            assert!(side(slab_faces, quad).iter().all(|&b| b == FaceBurial::Visible), "slab end {quad}");
+            assert!(side(box_faces, quad).contains(&FaceBurial::Crossed), "box side {quad}");
+        }
+        // A small box wholly inside the big one is buried.
+        let (mut pos, mut tris) = cuboid(Vec3::splat(-1.0), Vec3::splat(1.0));
+        let (inner_pos, inner_tris) = cuboid(Vec3::splat(-0.3), Vec3::splat(0.3));
+        pos.extend(inner_pos);
+        tris.extend(inner_tris.iter().map(|t| t.map(|v| v + 8)));
+        let body = BodyIndex::from_mesh(&pos, &tris);
+        let burials = BodyInterior::new(&body).face_burials(&tris);
+        assert!(burials[..12].iter().all(|&b| b == FaceBurial::Visible));
+        assert!(burials[12..].iter().all(|&b| b == FaceBurial::Buried));
+    }
+}
