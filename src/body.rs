@@ -306,7 +306,7 @@ impl TriangleGrid {
         t_max: f32,
         mut hit: impl FnMut(u32) -> Option<f32>,
     ) -> Option<RayHit> {
-        if self.corners.is_empty() || t_max <= 0.0 || t_max.is_nan() {
+        if self.corners.is_empty() || t_max <= 0.0 || t_max.is_nan() || !origin.is_finite() || !dir.is_finite() {
             return None;
         }
         let (t_enter, t_exit) = self.ray_span_in_grid(origin, dir, t_max)?;
