@@ -59,8 +59,10 @@ impl<'a> BodyInterior<'a> {
         }
         let origin = p + n * self.offset;
         let (u, v) = n.any_orthonormal_pair();
-        let rays = [n, (n + u * WINDING_RAY_TILT).normalize(), (n - v * WINDING_RAY_TILT).normalize()];
-        rays.iter().filter(|&&dir| self.winding_along_ray(origin, dir) >= 1).count() >= 2
+        let inside_along = |dir: Vec3| self.winding_along_ray(origin, dir) >= 1;
+        let (first, second) = (inside_along(n), inside_along((n + u * WINDING_RAY_TILT).normalize()));
+        // Two rays that agree are already the majority.
+        if first == second { first } else { inside_along((n - v * WINDING_RAY_TILT).normalize()) }
     }
 
     /// Each of the body's faces (in its index order): visible, buried, or
