@@ -148,6 +148,9 @@ pub struct HeightField {
     /// Scratch of the exact check of a chosen pose: the feather's part
     /// beyond its root socket.
     pub(crate) check_part: Vec<[Vec3; 3]>,
+    /// Scratch of the exact checks of one feather: its obstacles with
+    /// their boxes (see `steps::CheckedObstacle`).
+    pub(crate) checked: Vec<super::steps::CheckedObstacle>,
 }
 
 impl HeightField {
@@ -177,6 +180,7 @@ impl HeightField {
             row_span: Vec::new(),
             body_ids: Vec::new(),
             check_part: Vec::new(),
+            checked: Vec::new(),
         };
         f.set_resolution(u, v);
         f

@@ -32,8 +32,8 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
-use crate::validation::{FeatherBoxes, penetrates_body_hinted};
-use glam::Vec3;
+use crate::validation::{BoxedTriangles, FeatherBoxes, penetrates_body_hinted};
+use glam::{Vec2, Vec3};
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
 /// two to five.
@@ -127,7 +127,7 @@ pub fn adjust_feather(
                 break;
             }
             if !choice.too_steep
-                && exact_check(frame, shape, choice.pose, obstacles, body, scratch, relaxed, &mut hints)
+                && exact_check(frame, shape, choice.pose, Obstacles::Given(obstacles), body, scratch, relaxed, &mut hints)
             {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
@@ -204,7 +204,29 @@ fn exact_pitch_sweep(
     max_pitch: f32,
     hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
+    let mut checked = std::mem::take(&mut scratch.checked);
+    checked.clear();
+    checked.extend(obstacles.iter().map(|o| CheckedObstacle::new(o, frame)));
+    let found = pitch_sweep_with(frame, shape, params, &checked, body, scratch, smallest, max_pitch, hints);
+    scratch.checked = checked;
+    found
+}
+
+/// [`exact_pitch_sweep`] on the obstacles prepared for it.
+#[allow(clippy::too_many_arguments)]
+fn pitch_sweep_with(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    params: &AdjustParams,
+    obstacles: &[CheckedObstacle],
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    smallest: f32,
+    max_pitch: f32,
+    hints: &mut CheckHints,
+) -> Option<FeatherPose> {
     let sizes = std::iter::once(1.0).chain(SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale));
+    let margin = sweep_margin(frame, shape);
     for scale in sizes.take_while(|&s| s > smallest) {
         for k in 0..=SWEEP_PITCHES {
             let t = k as f32 / SWEEP_PITCHES as f32;
@@ -213,12 +235,48 @@ fn exact_pitch_sweep(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
-            if exact_check(frame, shape, pose, obstacles, body, scratch, true, hints) {
+            let plane = PitchPlane::new(pitch, margin);
+            if exact_check(frame, shape, pose, Obstacles::InPlane(obstacles, plane), body, scratch, true, hints) {
                 return Some(pose);
             }
         }
     }
     None
+}
+
+/// How far (in the root frame) a triangle must lie from an unrolled
+/// feather's plane for [`PitchPlane::clear_of`] to rule out contact: far
+/// above the rounding of the feather's and the obstacle's f32 corners
+/// (relative 1e-7 of the coordinates) and of the exact test's contact
+/// tolerance (1e-6 of the pair's box diagonal).
+fn sweep_margin(frame: &RootFrame, shape: &FeatherShape) -> f32 {
+    1e-4 * shape.length + 1e-5 * (frame.position.abs().max_element() + shape.length)
+}
+
+/// The plane of an unrolled feather at one pitch, in its root frame: it
+/// holds the root and the binormal (y), and the shaft at angle `pitch`
+/// from x towards z. Every part of the feather lies in it, so a triangle
+/// wholly on one side of it (beyond `margin`) cannot meet the feather.
+#[derive(Clone, Copy, Debug)]
+struct PitchPlane {
+    sin: f32,
+    cos: f32,
+    margin: f32,
+}
+
+impl PitchPlane {
+    fn new(pitch: f32, margin: f32) -> Self {
+        let (sin, cos) = pitch.sin_cos();
+        Self { sin, cos, margin }
+    }
+
+    /// Whether a triangle, given by its corners' (x, z) in the root frame,
+    /// lies wholly on one side of the plane, beyond the margin.
+    #[inline]
+    fn clear_of(&self, t: &[Vec2; 3]) -> bool {
+        let d = t.map(|p| p.y * self.cos - p.x * self.sin);
+        d.iter().all(|&d| d > self.margin) || d.iter().all(|&d| d < -self.margin)
+    }
 }
 
 /// Where an obstacle must reach to matter to [`adjust_feather`] for one
@@ -288,7 +346,7 @@ pub(crate) fn pose_is_clear(
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
-    exact_check(frame, shape, pose, obstacles, body, scratch, false, &mut CheckHints::default())
+    exact_check(frame, shape, pose, Obstacles::Given(obstacles), body, scratch, false, &mut CheckHints::default())
 }
 
 /// What made the last exact checks of one feather fail: the obstacle and
@@ -302,22 +360,75 @@ struct CheckHints {
     body: Option<u32>,
 }
 
-/// Whether `test` holds for some obstacle, trying `hint` first and
+/// An obstacle as the exact pitch sweep meets it again and again: its
+/// triangles and its [`raised_top`] with their boxes, and the corners of
+/// both in the feather's root frame, (x, z) only (see [`PitchPlane`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CheckedObstacle {
+    triangles: BoxedTriangles,
+    top: BoxedTriangles,
+    in_frame: [[Vec2; 3]; 4],
+}
+
+impl CheckedObstacle {
+    fn new(o: &ObstacleFeather, frame: &RootFrame) -> Self {
+        let top = raised_top(o);
+        let xz = |t: [Vec3; 3]| {
+            t.map(|p| {
+                let l = frame.to_local(p);
+                Vec2::new(l.x, l.z)
+            })
+        };
+        Self {
+            triangles: BoxedTriangles::new(&o.triangles),
+            top: BoxedTriangles::new(&top),
+            in_frame: [xz(o.triangles[0]), xz(o.triangles[1]), xz(top[0]), xz(top[1])],
+        }
+    }
+
+    /// Whether its triangles (`top`: its top's) may meet a feather in
+    /// `plane`: not when both lie wholly on one side.
+    #[inline]
+    fn may_meet(&self, plane: &PitchPlane, top: bool) -> bool {
+        let k = if top { 2 } else { 0 };
+        !(plane.clear_of(&self.in_frame[k]) && plane.clear_of(&self.in_frame[k + 1]))
+    }
+}
+
+/// The obstacles of an exact check: as given, or prepared for the sweep
+/// with the plane of the (unrolled) pose.
+#[derive(Clone, Copy)]
+enum Obstacles<'a> {
+    Given(&'a [ObstacleFeather]),
+    InPlane(&'a [CheckedObstacle], PitchPlane),
+}
+
+/// Whether `test` holds for some of `items`, trying `hint` first and
 /// setting it to the one found.
-fn any_obstacle(
-    obstacles: &[ObstacleFeather],
-    hint: &mut Option<usize>,
-    test: impl Fn(&ObstacleFeather) -> bool,
-) -> bool {
-    if hint.and_then(|k| obstacles.get(k)).is_some_and(&test) {
+fn any_of<T>(items: &[T], hint: &mut Option<usize>, test: impl Fn(&T) -> bool) -> bool {
+    if hint.and_then(|k| items.get(k)).is_some_and(&test) {
         return true;
     }
-    match obstacles.iter().position(test) {
+    match items.iter().position(test) {
         Some(k) => {
             *hint = Some(k);
             true
         }
         None => false,
+    }
+}
+
+/// Whether the feather (`mine`) meets some obstacle, or with `top` some
+/// obstacle's [`raised_top`], trying `hint` first and setting it to the
+/// one found. Obstacles wholly on one side of the sweep's plane are not
+/// tested: they cannot meet the feather.
+fn meets_obstacle(mine: &FeatherBoxes, obstacles: Obstacles<'_>, top: bool, hint: &mut Option<usize>) -> bool {
+    match obstacles {
+        Obstacles::Given(list) if top => any_of(list, hint, |o| mine.intersects(&raised_top(o))),
+        Obstacles::Given(list) => any_of(list, hint, |o| mine.intersects(&o.triangles)),
+        Obstacles::InPlane(list, plane) => any_of(list, hint, |o| {
+            o.may_meet(&plane, top) && mine.intersects_boxed(if top { &o.top } else { &o.triangles })
+        }),
     }
 }
 
@@ -328,21 +439,21 @@ fn exact_check(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
-    obstacles: &[ObstacleFeather],
+    obstacles: Obstacles<'_>,
     body: &BodyIndex,
     scratch: &mut HeightField,
     tops: bool,
     hints: &mut CheckHints,
 ) -> bool {
     let mine = FeatherBoxes::new(&feather_triangles(frame, shape, pose));
-    if any_obstacle(obstacles, &mut hints.obstacle, |o| mine.intersects(&o.triangles)) {
+    if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }
     if penetrates_body_hinted(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids, &mut hints.body)
     {
         return false;
     }
-    !(tops && any_obstacle(obstacles, &mut hints.top, |o| mine.intersects(&raised_top(o))))
+    !(tops && meets_obstacle(&mine, obstacles, true, &mut hints.top))
 }
 
 /// An obstacle's top: its two triangles raised by its thickness along

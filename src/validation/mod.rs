@@ -275,19 +275,40 @@ impl FeatherBoxes {
     /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
     /// feathers, then of each pair of triangles).
     pub(crate) fn intersects(&self, b: &[[Vec3; 3]; 2]) -> bool {
-        let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
-        if !self.whole.overlaps(&boxes_b[0].union(&boxes_b[1])) {
+        self.intersects_boxed(&BoxedTriangles::new(b))
+    }
+
+    /// [`FeatherBoxes::intersects`] against triangles whose boxes are
+    /// known: the same answer.
+    pub(crate) fn intersects_boxed(&self, b: &BoxedTriangles) -> bool {
+        if !self.whole.overlaps(&b.whole) {
             return false;
         }
         let mut prepared_b: [Option<Prepared>; 2] = [None; 2];
         self.prepared.iter().zip(&self.boxes).any(|(ta, box_a)| {
             !box_a.is_point()
-                && b.iter().zip(&boxes_b).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
+                && b.triangles.iter().zip(&b.boxes).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
                     !box_b.is_point()
                         && box_a.overlaps(box_b)
                         && prepared_intersect(ta, pb.get_or_insert_with(|| Prepared::of(tb)))
                 })
         })
+    }
+}
+
+/// Two triangles (a feather's, or its raised top) with their boxes, for
+/// testing against many posed feathers.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxedTriangles {
+    triangles: [[Vec3; 3]; 2],
+    boxes: [Aabb; 2],
+    whole: Aabb,
+}
+
+impl BoxedTriangles {
+    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
+        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
+        Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
     }
 }
 
