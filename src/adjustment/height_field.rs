@@ -148,9 +148,11 @@ pub struct HeightField {
     /// Scratch of the exact check of a chosen pose: the feather's part
     /// beyond its root socket.
     pub(crate) check_part: Vec<[Vec3; 3]>,
-    /// Scratch of the exact checks of one feather: its obstacles with
-    /// their boxes (see `steps::CheckedObstacle`).
-    pub(crate) checked: Vec<super::steps::CheckedObstacle>,
+    /// Scratch of the exact checks of one feather: its obstacles' boxes
+    /// when the caller gives none, and their corners in the root frame
+    /// (x, z) for the exact pitch sweep.
+    pub(crate) boxes: Vec<super::steps::ObstacleBoxes>,
+    pub(crate) in_frame: Vec<[[glam::Vec2; 3]; 4]>,
 }
 
 impl HeightField {
@@ -180,7 +182,8 @@ impl HeightField {
             row_span: Vec::new(),
             body_ids: Vec::new(),
             check_part: Vec::new(),
-            checked: Vec::new(),
+            boxes: Vec::new(),
+            in_frame: Vec::new(),
         };
         f.set_resolution(u, v);
         f

@@ -89,6 +89,29 @@ pub fn adjust_feather(
     steps: AdjustSteps,
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
+    let mut boxes = std::mem::take(&mut scratch.boxes);
+    boxes.clear();
+    boxes.extend(obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)));
+    let all = BoxesOf { ids: None, all: &boxes };
+    let outcome = adjust_feather_boxed(frame, shape, previous, obstacles, all, body, params, steps, scratch);
+    scratch.boxes = boxes;
+    outcome
+}
+
+/// [`adjust_feather`] with the obstacles' [`ObstacleBoxes`] made already
+/// (`boxes` lists them in the order of `obstacles`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn adjust_feather_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    previous: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+    scratch: &mut HeightField,
+) -> AdjustOutcome {
     scratch.set_resolution(params.height_field_u, params.height_field_v);
     let collision_tests = fill_field(scratch, frame, shape, obstacles, body, params);
     // The height field is conservative but coarse, and blind to what it
@@ -127,7 +150,7 @@ pub fn adjust_feather(
                 break;
             }
             if !choice.too_steep
-                && exact_check(frame, shape, choice.pose, Obstacles::Given(obstacles), body, scratch, relaxed, &mut hints)
+                && exact_check(frame, shape, choice.pose, Obstacles::Given(boxes), body, scratch, relaxed, &mut hints)
             {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
@@ -162,7 +185,7 @@ pub fn adjust_feather(
         None => (0.0, params.max_pitch),
     };
     if let Some(pose) =
-        exact_pitch_sweep(frame, shape, params, obstacles, body, scratch, smallest, max_pitch, &mut hints)
+        exact_pitch_sweep(frame, shape, params, boxes, body, scratch, smallest, max_pitch, &mut hints)
     {
         return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0 };
     }
@@ -197,28 +220,28 @@ fn exact_pitch_sweep(
     frame: &RootFrame,
     shape: &FeatherShape,
     params: &AdjustParams,
-    obstacles: &[ObstacleFeather],
+    boxes: BoxesOf<'_>,
     body: &BodyIndex,
     scratch: &mut HeightField,
     smallest: f32,
     max_pitch: f32,
     hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
-    let mut checked = std::mem::take(&mut scratch.checked);
-    checked.clear();
-    checked.extend(obstacles.iter().map(|o| CheckedObstacle::new(o, frame)));
-    let found = pitch_sweep_with(frame, shape, params, &checked, body, scratch, smallest, max_pitch, hints);
-    scratch.checked = checked;
+    let mut in_frame = std::mem::take(&mut scratch.in_frame);
+    in_frame.clear();
+    in_frame.extend((0..boxes.len()).map(|k| boxes.get(k).corners_in_frame(frame)));
+    let found = pitch_sweep_with(frame, shape, params, (boxes, &in_frame), body, scratch, smallest, max_pitch, hints);
+    scratch.in_frame = in_frame;
     found
 }
 
-/// [`exact_pitch_sweep`] on the obstacles prepared for it.
+/// [`exact_pitch_sweep`] with the obstacles' corners in the root frame.
 #[allow(clippy::too_many_arguments)]
 fn pitch_sweep_with(
     frame: &RootFrame,
     shape: &FeatherShape,
     params: &AdjustParams,
-    obstacles: &[CheckedObstacle],
+    (boxes, in_frame): (BoxesOf<'_>, &[[[Vec2; 3]; 4]]),
     body: &BodyIndex,
     scratch: &mut HeightField,
     smallest: f32,
@@ -236,7 +259,8 @@ fn pitch_sweep_with(
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
             let plane = PitchPlane::new(pitch, margin);
-            if exact_check(frame, shape, pose, Obstacles::InPlane(obstacles, plane), body, scratch, true, hints) {
+            let obstacles = Obstacles::InPlane(boxes, in_frame, plane);
+            if exact_check(frame, shape, pose, obstacles, body, scratch, true, hints) {
                 return Some(pose);
             }
         }
@@ -338,6 +362,7 @@ pub(crate) fn bounding_sphere(triangles: &[[Vec3; 3]; 2]) -> (Vec3, f32) {
 /// The exact check of a pose: the feather's triangles meet no obstacle's,
 /// and it does not penetrate the body beyond its root socket (the tests of
 /// [`crate::validation`]). `scratch` lends its body-query buffers.
+#[cfg(test)]
 pub(crate) fn pose_is_clear(
     frame: &RootFrame,
     shape: &FeatherShape,
@@ -346,7 +371,20 @@ pub(crate) fn pose_is_clear(
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
-    exact_check(frame, shape, pose, Obstacles::Given(obstacles), body, scratch, false, &mut CheckHints::default())
+    let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
+    pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes }, body, scratch)
+}
+
+/// [`pose_is_clear`] with the obstacles' [`ObstacleBoxes`] made already.
+pub(crate) fn pose_is_clear_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+) -> bool {
+    exact_check(frame, shape, pose, Obstacles::Given(boxes), body, scratch, false, &mut CheckHints::default())
 }
 
 /// What made the last exact checks of one feather fail: the obstacle and
@@ -360,56 +398,83 @@ struct CheckHints {
     body: Option<u32>,
 }
 
-/// An obstacle as the exact pitch sweep meets it again and again: its
-/// triangles and its [`raised_top`] with their boxes, and the corners of
-/// both in the feather's root frame, (x, z) only (see [`PitchPlane`]).
+/// An obstacle as the exact checks meet it: its triangles and its
+/// [`raised_top`] with their boxes. The adjuster makes them once per posed
+/// feather, for every feather it is an obstacle of.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct CheckedObstacle {
+pub(crate) struct ObstacleBoxes {
     triangles: BoxedTriangles,
     top: BoxedTriangles,
-    in_frame: [[Vec2; 3]; 4],
 }
 
-impl CheckedObstacle {
-    fn new(o: &ObstacleFeather, frame: &RootFrame) -> Self {
-        let top = raised_top(o);
-        let xz = |t: [Vec3; 3]| {
+impl ObstacleBoxes {
+    /// The boxes of an obstacle with these triangles and thickness.
+    pub(crate) fn new(triangles: &[[Vec3; 3]; 2], thickness: f32) -> Self {
+        let top = raised_top(triangles, thickness);
+        Self { triangles: BoxedTriangles::new(triangles), top: BoxedTriangles::new(&top) }
+    }
+
+    /// The (x, z) corners of its triangles and of its top in `frame`, for
+    /// [`may_meet`].
+    fn corners_in_frame(&self, frame: &RootFrame) -> [[Vec2; 3]; 4] {
+        let xz = |t: &[Vec3; 3]| {
             t.map(|p| {
                 let l = frame.to_local(p);
                 Vec2::new(l.x, l.z)
             })
         };
-        Self {
-            triangles: BoxedTriangles::new(&o.triangles),
-            top: BoxedTriangles::new(&top),
-            in_frame: [xz(o.triangles[0]), xz(o.triangles[1]), xz(top[0]), xz(top[1])],
+        let [a, b] = self.triangles.triangles();
+        let [c, d] = self.top.triangles();
+        [xz(a), xz(b), xz(c), xz(d)]
+    }
+}
+
+/// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
+/// `all[ids[k]]`, or `all[k]` without `ids`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxesOf<'a> {
+    pub(crate) ids: Option<&'a [u32]>,
+    pub(crate) all: &'a [ObstacleBoxes],
+}
+
+impl BoxesOf<'_> {
+    fn len(&self) -> usize {
+        self.ids.map_or(self.all.len(), <[u32]>::len)
+    }
+
+    #[inline]
+    fn get(&self, k: usize) -> &ObstacleBoxes {
+        match self.ids {
+            Some(ids) => &self.all[ids[k] as usize],
+            None => &self.all[k],
         }
     }
-
-    /// Whether its triangles (`top`: its top's) may meet a feather in
-    /// `plane`: not when both lie wholly on one side.
-    #[inline]
-    fn may_meet(&self, plane: &PitchPlane, top: bool) -> bool {
-        let k = if top { 2 } else { 0 };
-        !(plane.clear_of(&self.in_frame[k]) && plane.clear_of(&self.in_frame[k + 1]))
-    }
 }
 
-/// The obstacles of an exact check: as given, or prepared for the sweep
-/// with the plane of the (unrolled) pose.
+/// Whether an obstacle's triangles (`top`: its top's), given by their
+/// (x, z) corners in the root frame, may meet a feather in `plane`: not
+/// when both lie wholly on one side.
+#[inline]
+fn may_meet(corners: &[[Vec2; 3]; 4], plane: &PitchPlane, top: bool) -> bool {
+    let k = if top { 2 } else { 0 };
+    !(plane.clear_of(&corners[k]) && plane.clear_of(&corners[k + 1]))
+}
+
+/// The obstacles of an exact check, or those of the sweep with their
+/// corners in the root frame and the plane of the (unrolled) pose.
 #[derive(Clone, Copy)]
 enum Obstacles<'a> {
-    Given(&'a [ObstacleFeather]),
-    InPlane(&'a [CheckedObstacle], PitchPlane),
+    Given(BoxesOf<'a>),
+    InPlane(BoxesOf<'a>, &'a [[[Vec2; 3]; 4]], PitchPlane),
 }
 
-/// Whether `test` holds for some of `items`, trying `hint` first and
+/// Whether `test` holds for some index below `n`, trying `hint` first and
 /// setting it to the one found.
-fn any_of<T>(items: &[T], hint: &mut Option<usize>, test: impl Fn(&T) -> bool) -> bool {
-    if hint.and_then(|k| items.get(k)).is_some_and(&test) {
+fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -> bool {
+    if hint.is_some_and(|k| k < n && test(k)) {
         return true;
     }
-    match items.iter().position(test) {
+    match (0..n).position(test) {
         Some(k) => {
             *hint = Some(k);
             true
@@ -423,12 +488,12 @@ fn any_of<T>(items: &[T], hint: &mut Option<usize>, test: impl Fn(&T) -> bool) -
 /// one found. Obstacles wholly on one side of the sweep's plane are not
 /// tested: they cannot meet the feather.
 fn meets_obstacle(mine: &FeatherBoxes, obstacles: Obstacles<'_>, top: bool, hint: &mut Option<usize>) -> bool {
+    let part = |b: &ObstacleBoxes| mine.intersects_boxed(if top { &b.top } else { &b.triangles });
     match obstacles {
-        Obstacles::Given(list) if top => any_of(list, hint, |o| mine.intersects(&raised_top(o))),
-        Obstacles::Given(list) => any_of(list, hint, |o| mine.intersects(&o.triangles)),
-        Obstacles::InPlane(list, plane) => any_of(list, hint, |o| {
-            o.may_meet(&plane, top) && mine.intersects_boxed(if top { &o.top } else { &o.triangles })
-        }),
+        Obstacles::Given(boxes) => any_index(boxes.len(), hint, |k| part(boxes.get(k))),
+        Obstacles::InPlane(boxes, corners, plane) => {
+            any_index(boxes.len(), hint, |k| may_meet(&corners[k], &plane, top) && part(boxes.get(k)))
+        }
     }
 }
 
@@ -449,8 +514,8 @@ fn exact_check(
     if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }
-    if penetrates_body_hinted(frame, shape, pose, body, &mut scratch.check_part, &mut scratch.body_ids, &mut hints.body)
-    {
+    let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
+    if penetrates_body_hinted(frame, shape, pose, body, part, ids, &mut hints.body) {
         return false;
     }
     !(tops && meets_obstacle(&mine, obstacles, true, &mut hints.top))
@@ -461,12 +526,12 @@ fn exact_check(
 /// of every obstacle's top (tested in [`exact_check`]) and passing
 /// [`pose_is_clear`] stays out of the slab an obstacle fills, except for
 /// parts that end inside it.
-fn raised_top(o: &ObstacleFeather) -> [[Vec3; 3]; 2] {
+fn raised_top(triangles: &[[Vec3; 3]; 2], thickness: f32) -> [[Vec3; 3]; 2] {
     let raise = |t: [Vec3; 3]| {
-        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * o.thickness;
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * thickness;
         [t[0] + n, t[1] + n, t[2] + n]
     };
-    [raise(o.triangles[0]), raise(o.triangles[1])]
+    [raise(triangles[0]), raise(triangles[1])]
 }
 
 /// Clears `field` over `shape`'s footprint and rasterises the obstacles and

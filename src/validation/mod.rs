@@ -310,6 +310,11 @@ impl BoxedTriangles {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
     }
+
+    /// The two triangles.
+    pub(crate) fn triangles(&self) -> &[[Vec3; 3]; 2] {
+        &self.triangles
+    }
 }
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,
