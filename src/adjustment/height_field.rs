@@ -149,10 +149,8 @@ pub struct HeightField {
     /// beyond its root socket.
     pub(crate) check_part: Vec<[Vec3; 3]>,
     /// Scratch of the exact checks of one feather: its obstacles' boxes
-    /// when the caller gives none, and their corners in the root frame
-    /// (x, z) for the exact pitch sweep.
+    /// when the caller gives none.
     pub(crate) boxes: Vec<super::steps::ObstacleBoxes>,
-    pub(crate) in_frame: Vec<[[glam::Vec2; 3]; 4]>,
 }
 
 impl HeightField {
@@ -183,7 +181,6 @@ impl HeightField {
             body_ids: Vec::new(),
             check_part: Vec::new(),
             boxes: Vec::new(),
-            in_frame: Vec::new(),
         };
         f.set_resolution(u, v);
         f

@@ -30,10 +30,10 @@
 use super::height_field::{GridExtent, JUDGE_FRACTION, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
+use crate::feather::{FeatherPose, FeatherShape};
 use crate::geometry::RootFrame;
 use crate::validation::{BoxedTriangles, FeatherBoxes, penetrates_body_hinted};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
 /// two to five.
@@ -150,7 +150,7 @@ pub(crate) fn adjust_feather_boxed(
                 break;
             }
             if !choice.too_steep
-                && exact_check(frame, shape, choice.pose, Obstacles::Given(boxes), body, scratch, relaxed, &mut hints)
+                && exact_check(frame, shape, choice.pose, boxes, body, scratch, relaxed, &mut hints)
             {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
@@ -227,29 +227,7 @@ fn exact_pitch_sweep(
     max_pitch: f32,
     hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
-    let mut in_frame = std::mem::take(&mut scratch.in_frame);
-    in_frame.clear();
-    in_frame.extend((0..boxes.len()).map(|k| boxes.get(k).corners_in_frame(frame)));
-    let found = pitch_sweep_with(frame, shape, params, (boxes, &in_frame), body, scratch, smallest, max_pitch, hints);
-    scratch.in_frame = in_frame;
-    found
-}
-
-/// [`exact_pitch_sweep`] with the obstacles' corners in the root frame.
-#[allow(clippy::too_many_arguments)]
-fn pitch_sweep_with(
-    frame: &RootFrame,
-    shape: &FeatherShape,
-    params: &AdjustParams,
-    (boxes, in_frame): (BoxesOf<'_>, &[[[Vec2; 3]; 4]]),
-    body: &BodyIndex,
-    scratch: &mut HeightField,
-    smallest: f32,
-    max_pitch: f32,
-    hints: &mut CheckHints,
-) -> Option<FeatherPose> {
     let sizes = std::iter::once(1.0).chain(SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale));
-    let margin = sweep_margin(frame, shape);
     for scale in sizes.take_while(|&s| s > smallest) {
         for k in 0..=SWEEP_PITCHES {
             let t = k as f32 / SWEEP_PITCHES as f32;
@@ -258,49 +236,12 @@ fn pitch_sweep_with(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
-            let plane = PitchPlane::new(pitch, margin);
-            let obstacles = Obstacles::InPlane(boxes, in_frame, plane);
-            if exact_check(frame, shape, pose, obstacles, body, scratch, true, hints) {
+            if exact_check(frame, shape, pose, boxes, body, scratch, true, hints) {
                 return Some(pose);
             }
         }
     }
     None
-}
-
-/// How far (in the root frame) a triangle must lie from an unrolled
-/// feather's plane for [`PitchPlane::clear_of`] to rule out contact: far
-/// above the rounding of the feather's and the obstacle's f32 corners
-/// (relative 1e-7 of the coordinates) and of the exact test's contact
-/// tolerance (1e-6 of the pair's box diagonal).
-fn sweep_margin(frame: &RootFrame, shape: &FeatherShape) -> f32 {
-    1e-4 * shape.length + 1e-5 * (frame.position.abs().max_element() + shape.length)
-}
-
-/// The plane of an unrolled feather at one pitch, in its root frame: it
-/// holds the root and the binormal (y), and the shaft at angle `pitch`
-/// from x towards z. Every part of the feather lies in it, so a triangle
-/// wholly on one side of it (beyond `margin`) cannot meet the feather.
-#[derive(Clone, Copy, Debug)]
-struct PitchPlane {
-    sin: f32,
-    cos: f32,
-    margin: f32,
-}
-
-impl PitchPlane {
-    fn new(pitch: f32, margin: f32) -> Self {
-        let (sin, cos) = pitch.sin_cos();
-        Self { sin, cos, margin }
-    }
-
-    /// Whether a triangle, given by its corners' (x, z) in the root frame,
-    /// lies wholly on one side of the plane, beyond the margin.
-    #[inline]
-    fn clear_of(&self, t: &[Vec2; 3]) -> bool {
-        let d = t.map(|p| p.y * self.cos - p.x * self.sin);
-        d.iter().all(|&d| d > self.margin) || d.iter().all(|&d| d < -self.margin)
-    }
 }
 
 /// Where an obstacle must reach to matter to [`adjust_feather`] for one
@@ -384,7 +325,7 @@ pub(crate) fn pose_is_clear_boxed(
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
-    exact_check(frame, shape, pose, Obstacles::Given(boxes), body, scratch, false, &mut CheckHints::default())
+    exact_check(frame, shape, pose, boxes, body, scratch, false, &mut CheckHints::default())
 }
 
 /// What made the last exact checks of one feather fail: the obstacle and
@@ -413,20 +354,6 @@ impl ObstacleBoxes {
         let top = raised_top(triangles, thickness);
         Self { triangles: BoxedTriangles::new(triangles), top: BoxedTriangles::new(&top) }
     }
-
-    /// The (x, z) corners of its triangles and of its top in `frame`, for
-    /// [`may_meet`].
-    fn corners_in_frame(&self, frame: &RootFrame) -> [[Vec2; 3]; 4] {
-        let xz = |t: &[Vec3; 3]| {
-            t.map(|p| {
-                let l = frame.to_local(p);
-                Vec2::new(l.x, l.z)
-            })
-        };
-        let [a, b] = self.triangles.triangles();
-        let [c, d] = self.top.triangles();
-        [xz(a), xz(b), xz(c), xz(d)]
-    }
 }
 
 /// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
@@ -451,23 +378,6 @@ impl BoxesOf<'_> {
     }
 }
 
-/// Whether an obstacle's triangles (`top`: its top's), given by their
-/// (x, z) corners in the root frame, may meet a feather in `plane`: not
-/// when both lie wholly on one side.
-#[inline]
-fn may_meet(corners: &[[Vec2; 3]; 4], plane: &PitchPlane, top: bool) -> bool {
-    let k = if top { 2 } else { 0 };
-    !(plane.clear_of(&corners[k]) && plane.clear_of(&corners[k + 1]))
-}
-
-/// The obstacles of an exact check, or those of the sweep with their
-/// corners in the root frame and the plane of the (unrolled) pose.
-#[derive(Clone, Copy)]
-enum Obstacles<'a> {
-    Given(BoxesOf<'a>),
-    InPlane(BoxesOf<'a>, &'a [[[Vec2; 3]; 4]], PitchPlane),
-}
-
 /// Whether `test` holds for some index below `n`, trying `hint` first and
 /// setting it to the one found.
 fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -> bool {
@@ -485,16 +395,12 @@ fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -
 
 /// Whether the feather (`mine`) meets some obstacle, or with `top` some
 /// obstacle's [`raised_top`], trying `hint` first and setting it to the
-/// one found. Obstacles wholly on one side of the sweep's plane are not
-/// tested: they cannot meet the feather.
-fn meets_obstacle(mine: &FeatherBoxes, obstacles: Obstacles<'_>, top: bool, hint: &mut Option<usize>) -> bool {
-    let part = |b: &ObstacleBoxes| mine.intersects_boxed(if top { &b.top } else { &b.triangles });
-    match obstacles {
-        Obstacles::Given(boxes) => any_index(boxes.len(), hint, |k| part(boxes.get(k))),
-        Obstacles::InPlane(boxes, corners, plane) => {
-            any_index(boxes.len(), hint, |k| may_meet(&corners[k], &plane, top) && part(boxes.get(k)))
-        }
-    }
+/// one found.
+fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut Option<usize>) -> bool {
+    any_index(boxes.len(), hint, |k| {
+        let b = boxes.get(k);
+        mine.intersects_boxed(if top { &b.top } else { &b.triangles })
+    })
 }
 
 /// [`pose_is_clear`], and with `tops` also clear of every [`raised_top`]
@@ -504,13 +410,13 @@ fn exact_check(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
-    obstacles: Obstacles<'_>,
+    obstacles: BoxesOf<'_>,
     body: &BodyIndex,
     scratch: &mut HeightField,
     tops: bool,
     hints: &mut CheckHints,
 ) -> bool {
-    let mine = FeatherBoxes::new(&feather_triangles(frame, shape, pose));
+    let mine = FeatherBoxes::of_feather(frame, shape, pose);
     if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }

@@ -9,7 +9,7 @@ use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid, ray_triangle};
-use crate::feather::{FeatherPose, FeatherShape, shaft_direction};
+use crate::feather::{FeatherPose, FeatherShape, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::rng::Rng;
 use glam::Vec3;
@@ -212,8 +212,15 @@ pub(crate) fn penetrates_body_hinted(
         *p = Prepared::of(t);
     }
     let prepared = &prepared[..part.len().min(4)];
+    // Every part lies in the feather's plane: a body triangle wholly on
+    // one side of it crosses none of them.
+    let plane = FlatPlane::of_feather(frame, shape, pose);
     let crossing = |t: u32| {
-        let tri = Prepared::of(&body.corners(t));
+        let corners = body.corners(t);
+        if plane.apart(&corners) {
+            return false;
+        }
+        let tri = Prepared::of(&corners);
         prepared.iter().any(|p| prepared_intersect(p, &tri))
     };
     // The box query returns exactly the triangles whose boxes overlap
@@ -262,13 +269,22 @@ pub(crate) struct FeatherBoxes {
     prepared: [Prepared; 2],
     boxes: [Aabb; 2],
     whole: Aabb,
+    plane: Option<FlatPlane>,
 }
 
 impl FeatherBoxes {
     pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
-        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]) }
+        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]), plane: None }
+    }
+
+    /// The boxes of a feather at a pose, knowing the plane it lies in
+    /// (triangles wholly on one side of it are ruled out without the
+    /// exact test): the same answers as [`FeatherBoxes::new`].
+    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let plane = FlatPlane::of_feather(frame, shape, pose);
+        Self { plane: Some(plane), ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
@@ -290,9 +306,41 @@ impl FeatherBoxes {
                 && b.triangles.iter().zip(&b.boxes).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
                     !box_b.is_point()
                         && box_a.overlaps(box_b)
+                        && !self.plane.is_some_and(|p| p.apart(tb))
                         && prepared_intersect(ta, pb.get_or_insert_with(|| Prepared::of(tb)))
                 })
         })
+    }
+}
+
+/// The plane a posed (flat) feather lies in, with a margin: a triangle
+/// wholly beyond the margin on one side cannot meet the feather, and the
+/// exact test, which treats contact within its tolerance as no
+/// intersection, would find none. The margin (1e-4 of the length, and
+/// 1e-5 of the coordinates) lies far above the rounding of the posed
+/// feather's f32 corners and of the other triangle's (relative 1e-7 of
+/// the coordinates); a doubtful triangle goes to the exact test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FlatPlane {
+    normal: Vec3,
+    offset: f32,
+    margin: f32,
+}
+
+impl FlatPlane {
+    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let normal = feather_normal(frame, pose);
+        let length = shape.length * pose.scale.abs();
+        let margin = 1e-4 * length + 1e-5 * (frame.position.abs().max_element() + length);
+        Self { normal, offset: normal.dot(frame.position), margin }
+    }
+
+    /// Whether triangle `t` lies wholly on one side, beyond the margin.
+    #[inline]
+    pub(crate) fn apart(&self, t: &[Vec3; 3]) -> bool {
+        let d = t.map(|p| self.normal.dot(p) - self.offset);
+        (d[0] > self.margin && d[1] > self.margin && d[2] > self.margin)
+            || (d[0] < -self.margin && d[1] < -self.margin && d[2] < -self.margin)
     }
 }
 
@@ -309,11 +357,6 @@ impl BoxedTriangles {
     pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
-    }
-
-    /// The two triangles.
-    pub(crate) fn triangles(&self) -> &[[Vec3; 3]; 2] {
-        &self.triangles
     }
 }
 
