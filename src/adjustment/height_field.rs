@@ -548,15 +548,21 @@ impl TrianglePlane {
         // lo ≥ i0 and hi ≤ i1 (neither is ever NaN); clamped to within one
         // of the other end, they round the same way or stay out of range.
         let (far_lo, far_hi) = (i1 as f32 + 1.0, i0 as f32 - 1.0);
-        let mut span = [(1, 0); SPAN_ROWS];
+        // Rounded in a loop of its own, over plain i32 arrays, so that it
+        // vectorises.
+        let (mut first, mut last) = ([0i32; SPAN_ROWS], [0i32; SPAN_ROWS]);
         for k in 0..SPAN_ROWS {
             let (l, h) = (min_f(lo[k], far_lo), max_f(hi[k], far_hi));
             // SAFETY: both lie in [−1, u + 1], well within i32.
             let (lt, ht) = unsafe { (l.to_int_unchecked::<i32>(), h.to_int_unchecked::<i32>()) };
             // ⌈l⌉ and ⌊h⌋ (see `ceil_i32`, `floor_i32`).
-            let (l, h) = (lt + i32::from((lt as f32) < l), ht - i32::from((ht as f32) > h));
-            if !shut[k] && l <= h {
-                span[k] = (l as usize, h as usize);
+            first[k] = lt + i32::from((lt as f32) < l);
+            last[k] = ht - i32::from((ht as f32) > h);
+        }
+        let mut span = [(1, 0); SPAN_ROWS];
+        for k in 0..SPAN_ROWS {
+            if !shut[k] && first[k] <= last[k] {
+                span[k] = (first[k] as usize, last[k] as usize);
             }
         }
         span
