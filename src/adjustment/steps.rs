@@ -32,7 +32,7 @@ use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeath
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape};
 use crate::geometry::RootFrame;
-use crate::validation::{BoxedTriangles, FeatherBoxes, penetrates_body_hinted};
+use crate::validation::{BoxedTriangles, FeatherBoxes};
 use glam::Vec3;
 
 /// Jump iterations before giving up (reported as a clamp). Real fields need
@@ -421,7 +421,7 @@ fn exact_check(
         return false;
     }
     let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
-    if penetrates_body_hinted(frame, shape, pose, body, part, ids, &mut hints.body) {
+    if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
         return false;
     }
     !(tops && meets_obstacle(&mine, obstacles, true, &mut hints.top))

@@ -119,11 +119,22 @@ pub fn feather_beyond_root(frame: &RootFrame, shape: &FeatherShape, pose: Feathe
 
 /// [`feather_beyond_root`] into a reused buffer (cleared first).
 fn feather_beyond_root_into(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose, out: &mut Vec<[Vec3; 3]>) {
-    out.clear();
     let tris = crate::feather::feather_triangles(frame, shape, pose);
+    clip_beyond_root(frame, shape, pose, &tris, out);
+}
+
+/// [`feather_beyond_root_into`] from the feather's triangles at `pose`.
+fn clip_beyond_root(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    tris: &[[Vec3; 3]; 2],
+    out: &mut Vec<[Vec3; 3]>,
+) {
+    out.clear();
     let axis = shaft_direction(frame, pose);
     let cut = ROOT_ALLOWANCE * shape.length * pose.scale;
-    for t in &tris {
+    for t in tris {
         clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, out);
     }
 }
@@ -198,11 +209,29 @@ pub(crate) fn penetrates_body_hinted(
     ids: &mut Vec<u32>,
     hint: &mut Option<u32>,
 ) -> bool {
+    let tris = crate::feather::feather_triangles(frame, shape, pose);
+    let plane = FlatPlane::of_feather(frame, shape, pose);
+    penetrates_body_posed(frame, shape, pose, (&tris, plane), body, part, ids, hint)
+}
+
+/// [`penetrates_body_hinted`] given the feather's triangles at `pose` and
+/// its plane.
+#[allow(clippy::too_many_arguments)]
+fn penetrates_body_posed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    (tris, plane): (&[[Vec3; 3]; 2], FlatPlane),
+    body: &BodyIndex,
+    part: &mut Vec<[Vec3; 3]>,
+    ids: &mut Vec<u32>,
+    hint: &mut Option<u32>,
+) -> bool {
     if pose.scale <= 0.0 {
         // A feather left out (size 0) is a point on the skin.
         return false;
     }
-    feather_beyond_root_into(frame, shape, pose, part);
+    clip_beyond_root(frame, shape, pose, tris, part);
     let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
         return false;
     };
@@ -214,7 +243,6 @@ pub(crate) fn penetrates_body_hinted(
     let prepared = &prepared[..part.len().min(4)];
     // Every part lies in the feather's plane: a body triangle wholly on
     // one side of it crosses none of them.
-    let plane = FlatPlane::of_feather(frame, shape, pose);
     let crossing = |t: u32| {
         let corners = body.corners(t);
         if plane.apart(&corners) {
@@ -266,6 +294,7 @@ pub(crate) fn penetrates_body_hinted(
 /// A feather's two triangles with their bounding boxes, for testing one
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
+    triangles: [[Vec3; 3]; 2],
     prepared: [Prepared; 2],
     boxes: [Aabb; 2],
     whole: Aabb,
@@ -276,7 +305,7 @@ impl FeatherBoxes {
     pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
-        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]), plane: None }
+        Self { triangles: *triangles, prepared, boxes, whole: boxes[0].union(&boxes[1]), plane: None }
     }
 
     /// The boxes of a feather at a pose, knowing the plane it lies in
@@ -285,6 +314,26 @@ impl FeatherBoxes {
     pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
         let plane = FlatPlane::of_feather(frame, shape, pose);
         Self { plane: Some(plane), ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
+    }
+
+    /// [`penetrates_body_hinted`] for the feather and pose these boxes were
+    /// made of with [`FeatherBoxes::of_feather`] (its triangles and plane
+    /// made once for both tests).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn penetrates_body(
+        &self,
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        pose: FeatherPose,
+        body: &BodyIndex,
+        part: &mut Vec<[Vec3; 3]>,
+        ids: &mut Vec<u32>,
+        hint: &mut Option<u32>,
+    ) -> bool {
+        match self.plane {
+            Some(plane) => penetrates_body_posed(frame, shape, pose, (&self.triangles, plane), body, part, ids, hint),
+            None => penetrates_body_hinted(frame, shape, pose, body, part, ids, hint),
+        }
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
