@@ -130,6 +130,9 @@ pub struct HeightField {
     pub(crate) body: Vec<f32>,
     /// Combined height each step must clear (scratch of the steps).
     pub(crate) need: Vec<f32>,
+    /// The body slope and obstacle lift `need` was combined with, while
+    /// neither layer has changed since (see `combine_heights`).
+    pub(crate) need_for: Option<(f32, f32)>,
     /// Column centres (x) and row centres (y).
     pub(crate) col_x: Vec<f32>,
     pub(crate) row_y: Vec<f32>,
@@ -170,6 +173,7 @@ impl HeightField {
             obstacle: Vec::new(),
             body: Vec::new(),
             need: Vec::new(),
+            need_for: None,
             col_x: Vec::new(),
             row_y: Vec::new(),
             col_near: Vec::new(),
@@ -204,6 +208,7 @@ impl HeightField {
         }
         self.u = u;
         self.v = v;
+        self.need_for = None;
         for layer in [&mut self.obstacle, &mut self.body, &mut self.need] {
             layer.resize(u * v, 0.0);
         }
@@ -226,6 +231,7 @@ impl HeightField {
         self.body_floor = self.floor.max(-(l + self.dx) * (-min_pitch).max(0.0).tan() - self.dy);
         self.obstacle.fill(self.floor);
         self.body.fill(self.floor);
+        self.need_for = None;
         for i in 0..self.u {
             let x = (i as f32 + 0.5) * self.dx;
             self.col_x[i] = x;
@@ -379,6 +385,7 @@ impl HeightField {
         if i0 > i1 || j0 > j1 {
             return false;
         }
+        self.need_for = None;
         let plane = TrianglePlane::new(g, [tri[0].z, tri[1].z, tri[2].z]);
         let cells = match layer {
             Layer::Obstacle => &mut self.obstacle,

@@ -550,6 +550,13 @@ impl HeightField {
         let floor = self.floor;
         let body_slope = params.body_clearance_angle.max(0.0).tan();
         let obstacle_lift = params.clearance.max(0.0) * self.shape.thickness - allowance;
+        // Unchanged layers (the same fill judged again, or a shorter size
+        // on it) combine to the same heights.
+        let key = (body_slope, obstacle_lift);
+        if self.need_for.is_some_and(|k| k.0.to_bits() == key.0.to_bits() && k.1.to_bits() == key.1.to_bits()) {
+            return;
+        }
+        self.need_for = Some(key);
         let u = self.u;
         // The clearance angle is measured from the cell's near edge (not
         // before `clearance_from`), not from the distance the steps judge
