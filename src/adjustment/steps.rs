@@ -404,7 +404,9 @@ fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut
 }
 
 /// [`pose_is_clear`], and with `tops` also clear of every [`raised_top`]
-/// (last: most poses that fail, fail before it).
+/// (last: most poses that fail, fail before it; testing the tops before
+/// the body took 3 % more instructions in `adjust_feather` on the
+/// Flamingo bench).
 #[allow(clippy::too_many_arguments)]
 fn exact_check(
     frame: &RootFrame,
