@@ -154,6 +154,8 @@ pub struct HeightField {
     /// Scratch of the exact checks of one feather: its obstacles' boxes
     /// when the caller gives none.
     pub(crate) boxes: Vec<super::steps::ObstacleBoxes>,
+    /// The obstacles within reach of one size of the exact pitch sweep.
+    pub(crate) sweep_obstacles: Vec<u32>,
 }
 
 impl HeightField {
@@ -185,6 +187,7 @@ impl HeightField {
             body_ids: Vec::new(),
             check_part: Vec::new(),
             boxes: Vec::new(),
+            sweep_obstacles: Vec::new(),
         };
         f.set_resolution(u, v);
         f

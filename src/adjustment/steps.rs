@@ -29,7 +29,7 @@
 
 use super::height_field::{GridExtent, JUDGE_FRACTION, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
-use crate::body::BodyIndex;
+use crate::body::{Aabb, BodyIndex};
 use crate::feather::{FeatherPose, FeatherShape};
 use crate::geometry::RootFrame;
 use crate::validation::{BoxedTriangles, FeatherBoxes};
@@ -228,7 +228,10 @@ fn exact_pitch_sweep(
     hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
     let sizes = std::iter::once(1.0).chain(SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale));
-    for scale in sizes.take_while(|&s| s > smallest) {
+    let mut within = std::mem::take(&mut scratch.sweep_obstacles);
+    let mut found = None;
+    'sizes: for scale in sizes.take_while(|&s| s > smallest) {
+        let near = boxes.within_reach(frame, &shape.scaled(scale), &mut within);
         for k in 0..=SWEEP_PITCHES {
             let t = k as f32 / SWEEP_PITCHES as f32;
             let pitch = params.min_pitch + t * (params.max_pitch - params.min_pitch);
@@ -236,12 +239,14 @@ fn exact_pitch_sweep(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale };
-            if exact_check(frame, shape, pose, boxes, body, scratch, true, hints) {
-                return Some(pose);
+            if exact_check(frame, shape, pose, near, body, scratch, true, hints) {
+                found = Some(pose);
+                break 'sizes;
             }
         }
     }
-    None
+    scratch.sweep_obstacles = within;
+    found
 }
 
 /// Where an obstacle must reach to matter to [`adjust_feather`] for one
@@ -364,7 +369,29 @@ pub(crate) struct BoxesOf<'a> {
     pub(crate) all: &'a [ObstacleBoxes],
 }
 
-impl BoxesOf<'_> {
+impl<'a> BoxesOf<'a> {
+    /// Those whose triangles' or top's box meets the box around the ball
+    /// about the root that holds `shape` (a size of the feather at
+    /// `frame`) at any pose, listed into `within`: no other can meet the
+    /// posed feather's box, so leaving them out changes no answer (only
+    /// the positions the check hints refer to). The ball is widened far
+    /// beyond the rounding of the posed corners.
+    fn within_reach<'b>(&self, frame: &RootFrame, shape: &FeatherShape, within: &'b mut Vec<u32>) -> BoxesOf<'b>
+    where
+        'a: 'b,
+    {
+        let reach = shape.kite_corners().iter().map(|c| c.length()).fold(0.0f32, f32::max);
+        let radius = reach * (1.0 + 1e-3) + 1e-5 * frame.position.abs().max_element();
+        let ball = Aabb::around(frame.position, radius);
+        within.clear();
+        within.extend((0..self.len()).filter_map(|k| {
+            let b = self.get(k);
+            let index = self.ids.map_or(k as u32, |ids| ids[k]);
+            (b.triangles.bounds().overlaps(&ball) || b.top.bounds().overlaps(&ball)).then_some(index)
+        }));
+        BoxesOf { ids: Some(within), all: self.all }
+    }
+
     fn len(&self) -> usize {
         self.ids.map_or(self.all.len(), <[u32]>::len)
     }

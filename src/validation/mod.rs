@@ -407,6 +407,11 @@ impl BoxedTriangles {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
     }
+
+    /// The box of both triangles.
+    pub(crate) fn bounds(&self) -> &Aabb {
+        &self.whole
+    }
 }
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,
