@@ -130,6 +130,9 @@ pub struct HeightField {
     pub(crate) body: Vec<f32>,
     /// Combined height each step must clear (scratch of the steps).
     pub(crate) need: Vec<f32>,
+    /// The body slope and obstacle lift `need` was combined with, while
+    /// neither layer has changed since (see `combine_heights`).
+    pub(crate) need_for: Option<(f32, f32)>,
     /// Column centres (x) and row centres (y).
     pub(crate) col_x: Vec<f32>,
     pub(crate) row_y: Vec<f32>,
@@ -148,6 +151,11 @@ pub struct HeightField {
     /// Scratch of the exact check of a chosen pose: the feather's part
     /// beyond its root socket.
     pub(crate) check_part: Vec<[Vec3; 3]>,
+    /// Scratch of the exact checks of one feather: its obstacles' boxes
+    /// when the caller gives none.
+    pub(crate) boxes: Vec<super::steps::ObstacleBoxes>,
+    /// The obstacles within reach of one size of the exact pitch sweep.
+    pub(crate) sweep_obstacles: Vec<u32>,
 }
 
 impl HeightField {
@@ -167,6 +175,7 @@ impl HeightField {
             obstacle: Vec::new(),
             body: Vec::new(),
             need: Vec::new(),
+            need_for: None,
             col_x: Vec::new(),
             row_y: Vec::new(),
             col_near: Vec::new(),
@@ -177,6 +186,8 @@ impl HeightField {
             row_span: Vec::new(),
             body_ids: Vec::new(),
             check_part: Vec::new(),
+            boxes: Vec::new(),
+            sweep_obstacles: Vec::new(),
         };
         f.set_resolution(u, v);
         f
@@ -200,6 +211,7 @@ impl HeightField {
         }
         self.u = u;
         self.v = v;
+        self.need_for = None;
         for layer in [&mut self.obstacle, &mut self.body, &mut self.need] {
             layer.resize(u * v, 0.0);
         }
@@ -222,6 +234,7 @@ impl HeightField {
         self.body_floor = self.floor.max(-(l + self.dx) * (-min_pitch).max(0.0).tan() - self.dy);
         self.obstacle.fill(self.floor);
         self.body.fill(self.floor);
+        self.need_for = None;
         for i in 0..self.u {
             let x = (i as f32 + 0.5) * self.dx;
             self.col_x[i] = x;
@@ -375,6 +388,7 @@ impl HeightField {
         if i0 > i1 || j0 > j1 {
             return false;
         }
+        self.need_for = None;
         let plane = TrianglePlane::new(g, [tri[0].z, tri[1].z, tri[2].z]);
         let cells = match layer {
             Layer::Obstacle => &mut self.obstacle,
@@ -544,15 +558,21 @@ impl TrianglePlane {
         // lo ≥ i0 and hi ≤ i1 (neither is ever NaN); clamped to within one
         // of the other end, they round the same way or stay out of range.
         let (far_lo, far_hi) = (i1 as f32 + 1.0, i0 as f32 - 1.0);
-        let mut span = [(1, 0); SPAN_ROWS];
+        // Rounded in a loop of its own, over plain i32 arrays, so that it
+        // vectorises.
+        let (mut first, mut last) = ([0i32; SPAN_ROWS], [0i32; SPAN_ROWS]);
         for k in 0..SPAN_ROWS {
             let (l, h) = (min_f(lo[k], far_lo), max_f(hi[k], far_hi));
             // SAFETY: both lie in [−1, u + 1], well within i32.
             let (lt, ht) = unsafe { (l.to_int_unchecked::<i32>(), h.to_int_unchecked::<i32>()) };
             // ⌈l⌉ and ⌊h⌋ (see `ceil_i32`, `floor_i32`).
-            let (l, h) = (lt + i32::from((lt as f32) < l), ht - i32::from((ht as f32) > h));
-            if !shut[k] && l <= h {
-                span[k] = (l as usize, h as usize);
+            first[k] = lt + i32::from((lt as f32) < l);
+            last[k] = ht - i32::from((ht as f32) > h);
+        }
+        let mut span = [(1, 0); SPAN_ROWS];
+        for k in 0..SPAN_ROWS {
+            if !shut[k] && first[k] <= last[k] {
+                span[k] = (first[k] as usize, last[k] as usize);
             }
         }
         span

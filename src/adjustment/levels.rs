@@ -9,8 +9,8 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
-use super::steps::{ObstacleReach, bounding_sphere, pose_is_clear};
-use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather, adjust_feather};
+use super::steps::{BoxesOf, ObstacleBoxes, ObstacleReach, adjust_feather_boxed, bounding_sphere, pose_is_clear_boxed};
+use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
@@ -143,6 +143,8 @@ impl AdjustStats {
 struct Worker {
     field: HeightField,
     obstacles: Vec<ObstacleFeather>,
+    /// The feather index of each obstacle.
+    obstacle_ids: Vec<u32>,
 }
 
 /// Reusable state of ordered adjustments: level lists, feather triangles
@@ -153,6 +155,9 @@ pub struct Adjuster {
     triangles: Vec<[[Vec3; 3]; 2]>,
     /// A bounding sphere of each feather's triangles (centre, radius).
     spheres: Vec<(Vec3, f32)>,
+    /// Each feather's triangles and raised top with their boxes, as the
+    /// exact checks of the feathers it is an obstacle of meet them.
+    boxes: Vec<ObstacleBoxes>,
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
@@ -194,7 +199,10 @@ impl Adjuster {
     /// with rows up to that long allocates nothing (a frame whose second
     /// pass uses longer rows than the first may come late).
     pub fn reserve_obstacles(&mut self, longest: usize) {
-        self.workers.iter_mut().for_each(|w| w.obstacles.reserve(longest.saturating_sub(w.obstacles.len())));
+        self.workers.iter_mut().for_each(|w| {
+            w.obstacles.reserve(longest.saturating_sub(w.obstacles.len()));
+            w.obstacle_ids.reserve(longest.saturating_sub(w.obstacle_ids.len()));
+        });
     }
 
     /// Every feather's two triangles at the poses left by the last call.
@@ -367,7 +375,7 @@ impl Adjuster {
                     continue;
                 }
                 let marks = Marks { moved: &self.moved, changed: &self.changed };
-                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
                 let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
                 self.apply(i, &visit, &inputs, poses, &mut stats);
                 if self.changed[i] {
@@ -390,7 +398,7 @@ impl Adjuster {
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed };
-            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres };
+            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
             run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
             let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
             for k in 0..end - start {
@@ -440,6 +448,7 @@ impl Adjuster {
         poses[i] = o.pose;
         self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
         self.spheres[i] = bounding_sphere(&self.triangles[i]);
+        self.boxes[i] = ObstacleBoxes::new(&self.triangles[i], shapes[i].thickness);
         self.adjusted[i] = true;
         stats.adjusted += 1;
         stats.collision_tests += u64::from(o.collision_tests);
@@ -462,13 +471,16 @@ impl Adjuster {
     fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
         self.triangles.resize(frames.len(), [[Vec3::ZERO; 3]; 2]);
         self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
+        let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
+        self.boxes.resize(frames.len(), unset);
         self.triangles
             .par_iter_mut()
-            .zip(self.spheres.par_iter_mut())
+            .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut()))
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
-            .for_each(|((t, sphere), (f, (s, p)))| {
+            .for_each(|((t, (sphere, boxes)), (f, (s, p)))| {
                 *t = feather_triangles(f, s, *p);
                 *sphere = bounding_sphere(t);
+                *boxes = ObstacleBoxes::new(t, s.thickness);
             });
     }
 
@@ -563,6 +575,7 @@ impl Adjuster {
             self.workers.push(Worker {
                 field: HeightField::new(params.height_field_u, params.height_field_v),
                 obstacles: Vec::new(),
+                obstacle_ids: Vec::new(),
             });
         }
     }
@@ -606,6 +619,7 @@ struct Marks<'a> {
 struct Posed<'a> {
     triangles: &'a [[[Vec3; 3]; 2]],
     spheres: &'a [(Vec3, f32)],
+    boxes: &'a [ObstacleBoxes],
 }
 
 /// Adjusts the feathers of one level in parallel chunks; each chunk has its
@@ -662,9 +676,12 @@ fn adjust_one(
         verify = true;
     }
     worker.obstacles.clear();
+    worker.obstacle_ids.clear();
+    let ids = &mut worker.obstacle_ids;
     worker.obstacles.extend(earlier.filter_map(|j| {
         let (centre, radius) = posed.spheres[j];
         let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness)?;
+        ids.push(j as u32);
         Some(ObstacleFeather {
             triangles: posed.triangles[j],
             thickness: inputs.shapes[j].thickness,
@@ -673,23 +690,25 @@ fn adjust_one(
         })
     }));
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
     if verify {
         let clear = if inputs.pairs_only {
             let mine = feather_triangles(frame, shape, poses[i]);
             let mine = FeatherBoxes::new(&mine);
             !worker.obstacles.iter().any(|o| mine.intersects(&o.triangles))
         } else {
-            pose_is_clear(frame, shape, poses[i], &worker.obstacles, inputs.body, &mut worker.field)
+            pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
         };
         if clear {
             return Visit::Verified;
         }
     }
-    Visit::Adjusted(adjust_feather(
+    Visit::Adjusted(adjust_feather_boxed(
         &inputs.frames[i],
         &inputs.shapes[i],
         poses[i],
         &worker.obstacles,
+        boxes,
         inputs.body,
         inputs.params,
         inputs.steps,

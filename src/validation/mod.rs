@@ -12,7 +12,7 @@ use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid};
-use crate::feather::{FeatherPose, FeatherShape, shaft_direction};
+use crate::feather::{FeatherPose, FeatherShape, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -139,11 +139,22 @@ pub fn feather_beyond_root(frame: &RootFrame, shape: &FeatherShape, pose: Feathe
 
 /// [`feather_beyond_root`] into a reused buffer (cleared first).
 fn feather_beyond_root_into(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose, out: &mut Vec<[Vec3; 3]>) {
-    out.clear();
     let tris = crate::feather::feather_triangles(frame, shape, pose);
+    clip_beyond_root(frame, shape, pose, &tris, out);
+}
+
+/// [`feather_beyond_root_into`] from the feather's triangles at `pose`.
+fn clip_beyond_root(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    tris: &[[Vec3; 3]; 2],
+    out: &mut Vec<[Vec3; 3]>,
+) {
+    out.clear();
     let axis = shaft_direction(frame, pose);
     let cut = ROOT_ALLOWANCE * shape.length * pose.scale;
-    for t in &tris {
+    for t in tris {
         clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, out);
     }
 }
@@ -218,11 +229,29 @@ pub(crate) fn penetrates_body_hinted(
     ids: &mut Vec<u32>,
     hint: &mut Option<u32>,
 ) -> bool {
+    let tris = crate::feather::feather_triangles(frame, shape, pose);
+    let plane = FlatPlane::of_feather(frame, shape, pose);
+    penetrates_body_posed(frame, shape, pose, (&tris, plane), body, part, ids, hint)
+}
+
+/// [`penetrates_body_hinted`] given the feather's triangles at `pose` and
+/// its plane.
+#[allow(clippy::too_many_arguments)]
+fn penetrates_body_posed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    (tris, plane): (&[[Vec3; 3]; 2], FlatPlane),
+    body: &BodyIndex,
+    part: &mut Vec<[Vec3; 3]>,
+    ids: &mut Vec<u32>,
+    hint: &mut Option<u32>,
+) -> bool {
     if pose.scale <= 0.0 {
         // A feather left out (size 0) is a point on the skin.
         return false;
     }
-    feather_beyond_root_into(frame, shape, pose, part);
+    clip_beyond_root(frame, shape, pose, tris, part);
     let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
         return false;
     };
@@ -232,8 +261,14 @@ pub(crate) fn penetrates_body_hinted(
         *p = Prepared::of(t);
     }
     let prepared = &prepared[..part.len().min(4)];
+    // Every part lies in the feather's plane: a body triangle wholly on
+    // one side of it crosses none of them.
     let crossing = |t: u32| {
-        let tri = Prepared::of(&body.corners(t));
+        let corners = body.corners(t);
+        if plane.apart(&corners) {
+            return false;
+        }
+        let tri = Prepared::of(&corners);
         prepared.iter().any(|p| prepared_intersect(p, &tri))
     };
     // The box query returns exactly the triangles whose boxes overlap
@@ -279,35 +314,123 @@ pub(crate) fn penetrates_body_hinted(
 /// A feather's two triangles with their bounding boxes, for testing one
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
+    triangles: [[Vec3; 3]; 2],
     prepared: [Prepared; 2],
     boxes: [Aabb; 2],
     whole: Aabb,
+    plane: Option<FlatPlane>,
 }
 
 impl FeatherBoxes {
     pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
         let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
         let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
-        Self { prepared, boxes, whole: boxes[0].union(&boxes[1]) }
+        Self { triangles: *triangles, prepared, boxes, whole: boxes[0].union(&boxes[1]), plane: None }
+    }
+
+    /// The boxes of a feather at a pose, knowing the plane it lies in
+    /// (triangles wholly on one side of it are ruled out without the
+    /// exact test): the same answers as [`FeatherBoxes::new`].
+    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let plane = FlatPlane::of_feather(frame, shape, pose);
+        Self { plane: Some(plane), ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
+    }
+
+    /// [`penetrates_body_hinted`] for the feather and pose these boxes were
+    /// made of with [`FeatherBoxes::of_feather`] (its triangles and plane
+    /// made once for both tests).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn penetrates_body(
+        &self,
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        pose: FeatherPose,
+        body: &BodyIndex,
+        part: &mut Vec<[Vec3; 3]>,
+        ids: &mut Vec<u32>,
+        hint: &mut Option<u32>,
+    ) -> bool {
+        match self.plane {
+            Some(plane) => penetrates_body_posed(frame, shape, pose, (&self.triangles, plane), body, part, ids, hint),
+            None => penetrates_body_hinted(frame, shape, pose, body, part, ids, hint),
+        }
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
     /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
     /// feathers, then of each pair of triangles).
     pub(crate) fn intersects(&self, b: &[[Vec3; 3]; 2]) -> bool {
-        let boxes_b = [Aabb::of_triangle(&b[0]), Aabb::of_triangle(&b[1])];
-        if !self.whole.overlaps(&boxes_b[0].union(&boxes_b[1])) {
+        self.intersects_boxed(&BoxedTriangles::new(b))
+    }
+
+    /// [`FeatherBoxes::intersects`] against triangles whose boxes are
+    /// known: the same answer.
+    pub(crate) fn intersects_boxed(&self, b: &BoxedTriangles) -> bool {
+        if !self.whole.overlaps(&b.whole) {
             return false;
         }
         let mut prepared_b: [Option<Prepared>; 2] = [None; 2];
         self.prepared.iter().zip(&self.boxes).any(|(ta, box_a)| {
             !box_a.is_point()
-                && b.iter().zip(&boxes_b).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
+                && b.triangles.iter().zip(&b.boxes).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
                     !box_b.is_point()
                         && box_a.overlaps(box_b)
+                        && !self.plane.is_some_and(|p| p.apart(tb))
                         && prepared_intersect(ta, pb.get_or_insert_with(|| Prepared::of(tb)))
                 })
         })
+    }
+}
+
+/// The plane a posed (flat) feather lies in, with a margin: a triangle
+/// wholly beyond the margin on one side cannot meet the feather, and the
+/// exact test, which treats contact within its tolerance as no
+/// intersection, would find none. The margin (1e-4 of the length, and
+/// 1e-5 of the coordinates) lies far above the rounding of the posed
+/// feather's f32 corners and of the other triangle's (relative 1e-7 of
+/// the coordinates); a doubtful triangle goes to the exact test.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FlatPlane {
+    normal: Vec3,
+    offset: f32,
+    margin: f32,
+}
+
+impl FlatPlane {
+    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let normal = feather_normal(frame, pose);
+        let length = shape.length * pose.scale.abs();
+        let margin = 1e-4 * length + 1e-5 * (frame.position.abs().max_element() + length);
+        Self { normal, offset: normal.dot(frame.position), margin }
+    }
+
+    /// Whether triangle `t` lies wholly on one side, beyond the margin.
+    #[inline]
+    pub(crate) fn apart(&self, t: &[Vec3; 3]) -> bool {
+        let d = t.map(|p| self.normal.dot(p) - self.offset);
+        (d[0] > self.margin && d[1] > self.margin && d[2] > self.margin)
+            || (d[0] < -self.margin && d[1] < -self.margin && d[2] < -self.margin)
+    }
+}
+
+/// Two triangles (a feather's, or its raised top) with their boxes, for
+/// testing against many posed feathers.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxedTriangles {
+    triangles: [[Vec3; 3]; 2],
+    boxes: [Aabb; 2],
+    whole: Aabb,
+}
+
+impl BoxedTriangles {
+    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
+        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
+        Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
+    }
+
+    /// The box of both triangles.
+    pub(crate) fn bounds(&self) -> &Aabb {
+        &self.whole
     }
 }
 
