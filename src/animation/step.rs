@@ -3,8 +3,8 @@
 //! 1. re-pose every root from the deformed mesh; feathers keep their pitch
 //!    and roll relative to their own frame (incremental: neighbourhoods and
 //!    obstacle candidates follow the current pose);
-//! 2. `R_k`: feathers whose surroundings moved relative to them, summed
-//!    since they were last adjusted ([`super::motion::Staleness`]), by more
+//! 2. `R_k`: feathers whose surroundings moved relative to them since they
+//!    were last adjusted ([`super::motion::Staleness`]), by more
 //!    than `θs·L` (a feather's tip moves that far when its pitch changes by
 //!    θs, the change the propagation rule already lets pass). The
 //!    surroundings are the k nearest roots (their priorities) and the
@@ -27,16 +27,18 @@
 //! against its obstacles at their final poses and the skin, and readjusted
 //! only if the check fails ([`Selection::Verify`]). The readjustments that
 //! remain are for drift: the seeds are the feathers whose surroundings
-//! moved by more than the drift tolerance times their length, and
+//! moved by more than the drift tolerance times their length (net: the
+//! surroundings recorded when the feather was last adjusted, compared
+//! with where they lie now; see [`super::motion`]), and
 //! propagation passes on a feather sinking, shrinking or rolling by more
 //! than the drift tolerance (one that rises into what lies on it fails
 //! their checks). A feather whose obstacles changed with the order is a
 //! seed only when it lost one (it may have rested on it); one that only
-//! gained obstacles is checked. `R_k` (at θs) still selects the pairs
-//! whose priorities are recomputed.
+//! gained obstacles is checked. `R_k` (at θs, by the same net motion)
+//! still selects the pairs whose priorities are recomputed.
 
-use super::contact::Contacts;
-use super::motion::{RootMap, root_maps};
+use super::contact::{Contacts, Footprint, Sphere};
+use super::motion::{Placement, RootMap, root_maps};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
 use crate::body::BodyIndex;
@@ -59,6 +61,8 @@ pub struct StepWorkspace {
     previous_indices: Vec<u32>,
     maps: Vec<RootMap>,
     displacement: Vec<f32>,
+    net: Vec<f32>,
+    spheres: Vec<Sphere>,
     seeds: Vec<bool>,
     suspects: Vec<bool>,
     no_suspects: Vec<bool>,
@@ -81,12 +85,17 @@ pub fn step_coat(
     let start = Instant::now();
     let n = dressing.len();
     let incremental = dressing.mode == Mode::Incremental;
-    // 1. Re-pose; remember where everything was.
-    remember(coat, step);
-    coat.pose(dressing, positions);
+    // 1. Record where the surroundings of the feathers adjusted last lie;
+    // re-pose; remember where everything was.
     if coat.staleness.len() != n {
         coat.staleness.reset(n);
     }
+    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
+    if verify {
+        record_placements(coat, dressing, step);
+    }
+    remember(coat, step);
+    coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     if incremental && dressing.recompute_neighbourhoods {
         coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
@@ -97,13 +106,17 @@ pub fn step_coat(
 
     // 2. R_k from the relative motion of the roots since the last frame.
     root_maps(&step.previous_frames, &coat.frames, &mut step.maps);
-    surroundings_displacement(coat, dressing, step);
+    surroundings_displacement(coat, dressing, step, verify);
     step.seeds.clear();
     step.seeds.resize(n, false);
-    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
     let drift = if verify { dressing.drift_tolerance } else { dressing.theta_s };
     let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
-    coat.staleness.add(&step.displacement, |i| drift * dressing.shapes[i].length, &mut step.seeds);
+    let drift_limit = |i: usize| drift * dressing.shapes[i].length;
+    if verify {
+        coat.staleness.set_net(&step.net, drift_limit, &mut step.seeds);
+    } else {
+        coat.staleness.add(&step.displacement, drift_limit, &mut step.seeds);
+    }
     step.r_k.clear();
     step.r_k.extend((0..n as u32).filter(|&i| coat.staleness.moved()[i as usize] > limit(i as usize)));
     // The second pass's buffers, sized now: the first frame that needs
@@ -291,22 +304,62 @@ fn remember(coat: &Coat, step: &mut StepWorkspace) {
     step.previous_indices.extend_from_slice(indices);
 }
 
+/// Records, for each feather adjusted since the last record (all of them
+/// after a solve), where its surroundings lie in its frame at the pose the
+/// coat holds, the pose it was adjusted at: its k nearest roots (turns
+/// measured at their distance), then its earlier candidates lying over its
+/// footprint (at their length), those of [`surroundings_displacement`], as
+/// many as there are slots.
+fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorkspace) {
+    let n = dressing.len();
+    if coat.frames.len() != n || !(0..n).any(|i| coat.staleness.pending(i)) {
+        return;
+    }
+    let (frames, poses, shapes) = (&coat.frames, &coat.poses, &dressing.shapes);
+    step.spheres.clear();
+    step.spheres.extend((0..n).map(|j| Sphere::of(&frames[j], &shapes[j], poses[j])));
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
+    for i in 0..n {
+        if !coat.staleness.pending(i) {
+            continue;
+        }
+        let here = &frames[i];
+        let nearest = nb.neighbours_of(i as u32).iter().map(|&j| {
+            let there = &frames[j as usize];
+            Placement::of(here, j, there, here.position.distance(there.position))
+        });
+        let footprint = Footprint::of(&shapes[i], &dressing.adjust_params);
+        let row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
+        let resting = row
+            .iter()
+            .filter(|&&j| ranks[j as usize] < ranks[i] && footprint.reached_by(here, spheres[j as usize]))
+            .map(|&j| Placement::of(here, j, &frames[j as usize], shapes[j as usize].length));
+        coat.staleness.record(i, nearest.chain(resting));
+    }
+}
+
 /// For each feather, how far its surroundings moved relative to it since
-/// the last frame: over its k nearest roots j, the displacement at the
-/// distance between the roots (what their priority difference sees); over
-/// its earlier candidates lying over its footprint, the displacement at
-/// their length (what its height field sees).
-fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace) {
+/// the last frame (`displacement`): over its k nearest roots j, the
+/// displacement at the distance between the roots (what their priority
+/// difference sees); over its earlier candidates lying over its footprint,
+/// the displacement at their length (what its height field sees). With
+/// `net`, also how far the surroundings recorded when it was last adjusted
+/// moved since (`net`, the staleness of the verifying mode).
+fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace, net: bool) {
     let (maps, frames, ranks, contacts) = (&step.maps, &coat.frames, &step.previous_ranks, &step.contacts);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    let nb = &coat.neighbourhoods;
-    step.displacement.resize(dressing.len(), 0.0);
-    step.displacement.par_iter_mut().enumerate().with_min_len(128).for_each(|(i, out)| {
-        let here = &maps[i];
+    let (nb, staleness) = (&coat.neighbourhoods, &coat.staleness);
+    let n = dressing.len();
+    step.displacement.resize(n, 0.0);
+    step.net.resize(n, 0.0);
+    let outputs = step.displacement.par_iter_mut().zip(step.net.par_iter_mut());
+    outputs.enumerate().with_min_len(128).for_each(|(i, (out, moved_net))| {
+        let (here, frame) = (&maps[i], &frames[i]);
         let mut worst = 0.0f32;
         for &j in nb.neighbours_of(i as u32) {
             let j = j as usize;
-            worst = worst.max(here.relative(&maps[j]).at(frames[i].position.distance(frames[j].position)));
+            worst = worst.max(here.relative(&maps[j]).at(frame.position.distance(frames[j].position)));
         }
         let row = offsets[i] as usize..offsets[i + 1] as usize;
         for (e, &j) in row.clone().zip(&indices[row]) {
@@ -316,6 +369,10 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
             }
         }
         *out = worst;
+        if net {
+            let placements = staleness.placements(i);
+            *moved_net = placements.iter().map(|p| p.moved(frame, &frames[p.other as usize])).fold(0.0f32, f32::max);
+        }
     });
 }
 
