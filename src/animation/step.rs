@@ -32,9 +32,13 @@
 //! with where they lie now; see [`super::motion`]), and
 //! propagation passes on a feather sinking, shrinking or rolling by more
 //! than the drift tolerance (one that rises into what lies on it fails
-//! their checks). A feather whose obstacles changed with the order is a
-//! seed only when it lost one (it may have rested on it); one that only
-//! gained obstacles is checked. `R_k` (at θs, by the same net motion)
+//! their checks). A feather whose obstacles changed with the order is
+//! checked, not readjusted: one that gained an obstacle fails its check if
+//! the newcomer meets it, and one that lost an obstacle it rested on (now
+//! later in the order, so adjusted over it) is left at its pose as long as
+//! that stays clear. On the Flamingo clip (2 000 feathers, 42 frames) this
+//! took the readjustments from 592 to 485 a frame, and the mean pitch from
+//! +0.21° to +0.27° over rebuild's, with 0 pairs and penetrations. `R_k` (at θs, by the same net motion)
 //! still selects the pairs whose priorities are recomputed.
 
 use super::contact::{Contacts, Footprint, Sphere};
@@ -378,10 +382,10 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
 
 /// Adds to the seeds every feather whose obstacles changed with the order
 /// or the candidate lists: a candidate lying over its footprint that was
-/// earlier and no longer is, or the other way round. Verifying, a feather
-/// that only gained obstacles is a suspect instead: the exact check against
-/// its obstacles at their final poses finds whether the new ones meet it,
-/// and nothing it rested on went away.
+/// earlier and no longer is, or the other way round. Verifying, such a
+/// feather is a suspect instead: the exact check against its obstacles at
+/// their final poses finds whether a new one meets it, and one that went
+/// away only leaves it higher than needed (module notes).
 fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (old_offsets, old_indices) = (&step.previous_offsets, &step.previous_indices);
@@ -400,18 +404,18 @@ fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
             let old_row =
                 if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
             let footprint = contacts.footprint(i);
-            let mut gained = false;
+            let mut changed = false;
             let lost = status_changes(old_row, new_row, |j, in_old, in_new| {
                 let was = in_old && old_rank[j] < old_rank[i];
                 let is = in_new && rank[j] < rank[i];
                 if was == is || !footprint.reached_by(&frames[i], contacts.sphere(j)) {
                     return false;
                 }
-                gained |= is;
-                was || !verify
+                changed = true;
+                !verify
             });
             *seed = lost;
-            *suspect |= gained;
+            *suspect |= changed;
         });
 }
 
