@@ -109,7 +109,10 @@ pub fn root_maps(before: &[RootFrame], after: &[RootFrame], out: &mut Vec<RootMa
 /// Recorded placements per feather (the k nearest first, then obstacles in
 /// index order; the rest are left to the exact checks like surroundings
 /// that joined later). On the Flamingo clip a footprint has k = 10 nearest
-/// roots and typically 30 to 60 earlier candidates over it. TODO measured.
+/// roots and typically 30 to 60 earlier candidates over it; with 32 slots
+/// the clip readjusted 607 feathers a frame, with 16 587 (fewer
+/// surroundings watched, so less drift seen), one thread, one run each
+/// (before lost obstacles were only checked).
 const PLACEMENT_SLOTS: usize = 32;
 /// `counts` value of a feather adjusted since its placements were recorded.
 const PENDING: u8 = u8::MAX;

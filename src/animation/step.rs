@@ -398,7 +398,9 @@ fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
         .zip(step.suspects.par_iter_mut())
         .enumerate()
         .with_min_len(128)
-        .filter(|(_, (s, _))| !**s)
+        // Verifying, a change only makes a suspect, and a feather whose
+        // surroundings moved at all is one already.
+        .filter(|(_, (s, v))| !(**s || verify && **v))
         .for_each(|(i, (seed, suspect))| {
             let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
             let old_row =
