@@ -182,8 +182,10 @@ impl Staleness {
         self.summed.resize(n, 0.0);
         self.counts.clear();
         self.counts.resize(n, PENDING);
+        // The slots are filled by the first record: the modes that never
+        // record (rebuild, which resets every frame, legacy, the paper's
+        // rule) hold none.
         self.placements.clear();
-        self.placements.resize(n * PLACEMENT_SLOTS, Placement::default());
     }
 
     /// Number of feathers.
@@ -209,6 +211,10 @@ impl Staleness {
     /// Records feather i's placements (at most `PLACEMENT_SLOTS`; the rest
     /// count as unrecorded).
     pub fn record(&mut self, i: usize, placements: impl Iterator<Item = Placement>) {
+        let n = self.counts.len();
+        if self.placements.len() != n * PLACEMENT_SLOTS {
+            self.placements.resize(n * PLACEMENT_SLOTS, Placement::default());
+        }
         let slots = &mut self.placements[i * PLACEMENT_SLOTS..(i + 1) * PLACEMENT_SLOTS];
         let mut count = 0;
         for (slot, p) in slots.iter_mut().zip(placements) {
@@ -221,8 +227,11 @@ impl Staleness {
     /// Feather i's recorded placements (none while pending).
     #[inline]
     pub fn placements(&self, i: usize) -> &[Placement] {
-        let count = if self.pending(i) { 0 } else { self.counts[i] as usize };
-        &self.placements[i * PLACEMENT_SLOTS..i * PLACEMENT_SLOTS + count]
+        if self.pending(i) {
+            return &[];
+        }
+        let start = i * PLACEMENT_SLOTS;
+        &self.placements[start..start + self.counts[i] as usize]
     }
 
     /// Summed rule: adds this frame's displacement of each feather's
@@ -303,6 +312,9 @@ impl Staleness {
             }
             if count as usize > PLACEMENT_SLOTS {
                 return Err(invalid("a saved feather has more placements than are kept"));
+            }
+            if s.placements.len() != n * PLACEMENT_SLOTS {
+                s.placements.resize(n * PLACEMENT_SLOTS, Placement::default());
             }
             for slot in 0..count as usize {
                 let other = r.u32()?;
