@@ -40,7 +40,7 @@
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
 use crate::snapshot::{Reader, Writer};
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Quat, Vec3};
 
 /// The rigid map of one root frame from the previous frame to the current one.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,7 +119,8 @@ const PENDING: u8 = u8::MAX;
 
 /// Where one root (and its frame) lay in a feather's frame when the
 /// feather was last adjusted, and at which distance from it its motion is
-/// measured.
+/// measured. 36 bytes: the turn is a quaternion kept as four floats (a
+/// `Quat` would be aligned to 16 and take 48).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Placement {
     /// The other root, j.
@@ -128,34 +129,54 @@ pub struct Placement {
     pub radius: f32,
     /// `F_iᵀ (r_j − r_i)`.
     pub offset: Vec3,
-    /// `F_iᵀ F_j`.
-    pub turn: Mat3,
+    /// `F_iᵀ F_j` as a unit quaternion (x, y, z, w).
+    pub turn: [f32; 4],
+}
+
+/// A root frame with its axes as a unit quaternion ([`orientation`]),
+/// computed once per frame for every root.
+#[derive(Clone, Copy, Debug)]
+pub struct Oriented<'a> {
+    /// The frame.
+    pub frame: &'a RootFrame,
+    /// Its axes `(õ, b, n)` as a rotation.
+    pub orientation: Quat,
+}
+
+/// The rotation taking the world axes to a frame's `(õ, b, n)`.
+pub fn orientation(frame: &RootFrame) -> Quat {
+    Quat::from_mat3(&axes(frame))
 }
 
 impl Placement {
-    /// Root j's placement in frame i.
+    /// Root j's (`there`) placement in frame i (`here`).
     #[inline]
-    pub fn of(here: &RootFrame, other: u32, there: &RootFrame, radius: f32) -> Self {
+    pub fn of(here: Oriented<'_>, other: u32, there: Oriented<'_>, radius: f32) -> Self {
         let (offset, turn) = relative_placement(here, there);
-        Self { other, radius, offset, turn }
+        Self { other, radius, offset, turn: turn.to_array() }
     }
 
     /// How far j moved relative to i since the placement was recorded
-    /// (`miss + turn·ρ` of the module notes).
+    /// (`miss + turn·ρ` of the module notes; the turn `2 sin(θ/2)` of the
+    /// angle θ between the two rotations, from the quaternions' distance
+    /// `d = 2 sin(θ/4)` as `d √(4 − d²)`, which keeps small turns exact).
     #[inline]
-    pub fn moved(&self, here: &RootFrame, there: &RootFrame) -> f32 {
+    pub fn moved(&self, here: Oriented<'_>, there: Oriented<'_>) -> f32 {
         let (offset, turn) = relative_placement(here, there);
-        let d = turn - self.turn;
-        let frobenius2 = d.x_axis.length_squared() + d.y_axis.length_squared() + d.z_axis.length_squared();
-        offset.distance(self.offset) + frobenius2.sqrt() * std::f32::consts::FRAC_1_SQRT_2 * self.radius
+        let recorded = Quat::from_array(self.turn);
+        // q and −q are the same rotation: take the nearer.
+        let d = if turn.dot(recorded) >= 0.0 { turn - recorded } else { turn + recorded }.length();
+        let chord = d * (4.0 - d * d).max(0.0).sqrt();
+        offset.distance(self.offset) + chord * self.radius
     }
 }
 
-/// `(F_iᵀ (r_j − r_i), F_iᵀ F_j)`.
+/// `(F_iᵀ (r_j − r_i), F_iᵀ F_j)`, the second as a quaternion.
 #[inline]
-fn relative_placement(here: &RootFrame, there: &RootFrame) -> (Vec3, Mat3) {
-    let into = axes(here).transpose();
-    (into * (there.position - here.position), into * axes(there))
+fn relative_placement(here: Oriented<'_>, there: Oriented<'_>) -> (Vec3, Quat) {
+    let (f, d) = (here.frame, there.frame.position - here.frame.position);
+    let offset = Vec3::new(f.tangent.dot(d), f.binormal.dot(d), f.normal.dot(d));
+    (offset, here.orientation.conjugate() * there.orientation)
 }
 
 /// Per feather, how far its surroundings moved relative to it since it was
@@ -273,8 +294,8 @@ impl Staleness {
 
     /// Appends the state to a blob: the last frame's motions and the summed
     /// rule's sums (two length-prefixed f32 slices), then per feather its count (u8, 255 = pending) and each
-    /// recorded placement (other root u32, radius, offset xyz and the 3 × 3
-    /// turn by columns, f32).
+    /// recorded placement (other root u32, radius, offset xyz and the turn's
+    /// quaternion xyzw, f32).
     pub fn write_state(&self, w: &mut Writer) {
         w.f32s(&self.moved);
         w.f32s(&self.summed);
@@ -284,7 +305,7 @@ impl Staleness {
                 w.u32(p.other);
                 w.f32(p.radius);
                 p.offset.to_array().iter().for_each(|&x| w.f32(x));
-                p.turn.to_cols_array().iter().for_each(|&x| w.f32(x));
+                p.turn.iter().for_each(|&x| w.f32(x));
             }
         }
     }
@@ -320,15 +341,11 @@ impl Staleness {
                 let other = r.u32()?;
                 let radius = r.f32()?;
                 let offset = Vec3::new(r.f32()?, r.f32()?, r.f32()?);
-                let mut cols = [0.0f32; 9];
-                for c in &mut cols {
-                    *c = r.f32()?;
-                }
-                let turn = Mat3::from_cols_array(&cols);
+                let turn = [r.f32()?, r.f32()?, r.f32()?, r.f32()?];
                 if other as usize >= n || other as usize == i {
                     return Err(invalid("a saved placement names an invalid root"));
                 }
-                if !(radius.is_finite() && radius >= 0.0 && offset.is_finite() && turn.is_finite()) {
+                if !(radius.is_finite() && radius >= 0.0 && offset.is_finite() && turn.iter().all(|t| t.is_finite())) {
                     return Err(invalid("a saved placement is negative or not finite"));
                 }
                 s.placements[i * PLACEMENT_SLOTS + slot] = Placement { other, radius, offset, turn };
@@ -414,20 +431,25 @@ mod tests {
         let mut s = Staleness::default();
         s.reset(2);
         assert!(s.pending(0) && s.placements(0).is_empty());
-        s.record(0, std::iter::once(Placement::of(&a, 1, &b, 2.0)));
+        fn o(f: &RootFrame) -> Oriented<'_> {
+            Oriented { frame: f, orientation: orientation(f) }
+        }
+        s.record(0, std::iter::once(Placement::of(o(&a), 1, o(&b), 2.0)));
         assert!(!s.pending(0) && s.pending(1));
         // b slides by 0.3 and turns by 0.1 rad, then comes back.
         let away = frame(Vec3::new(1.3, 0.0, 0.0), Vec3::Z, Quat::from_rotation_z(0.1) * Vec3::X);
         let chord = 2.0 * (0.05f32).sin();
         let p = s.placements(0)[0];
-        assert!((p.moved(&a, &away) - (0.3 + 2.0 * chord)).abs() < 1e-4, "{}", p.moved(&a, &away));
-        assert!(p.moved(&a, &b) < 1e-6);
+        let moved_away = p.moved(o(&a), o(&away));
+        assert!((moved_away - (0.3 + 2.0 * chord)).abs() < 1e-4, "{moved_away}");
+        assert!(p.moved(o(&a), o(&b)) < 1e-6);
         // A rigid motion of both moves nothing.
         let q = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
         let rigid = |f: &RootFrame| frame(q * f.position + Vec3::ONE, q * f.normal, q * f.tangent);
-        assert!(p.moved(&rigid(&a), &rigid(&b)) < 1e-5);
+        let (ra, rb) = (rigid(&a), rigid(&b));
+        assert!(p.moved(o(&ra), o(&rb)) < 1e-5, "{}", p.moved(o(&ra), o(&rb)));
         let mut over = vec![false; 2];
-        s.set_net(&[p.moved(&a, &away), 0.0], |_| 0.4, &mut over);
+        s.set_net(&[moved_away, 0.0], |_| 0.4, &mut over);
         assert_eq!(over, [true, false]);
         let mut w = Writer::new(5);
         s.write_state(&mut w);
@@ -441,7 +463,7 @@ mod tests {
         // A placement naming the feather itself is refused.
         let mut bad = Staleness::default();
         bad.reset(2);
-        bad.record(0, std::iter::once(Placement::of(&a, 0, &b, 2.0)));
+        bad.record(0, std::iter::once(Placement::of(o(&a), 0, o(&b), 2.0)));
         let mut w = Writer::new(5);
         bad.write_state(&mut w);
         let blob = w.finish();

@@ -42,7 +42,7 @@
 //! still selects the pairs whose priorities are recomputed.
 
 use super::contact::{Contacts, Footprint, Sphere};
-use super::motion::{Placement, RootMap, root_maps};
+use super::motion::{Oriented, Placement, RootMap, orientation, root_maps};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
 use crate::body::BodyIndex;
@@ -66,6 +66,7 @@ pub struct StepWorkspace {
     maps: Vec<RootMap>,
     displacement: Vec<f32>,
     net: Vec<f32>,
+    orientations: Vec<glam::Quat>,
     spheres: Vec<Sphere>,
     seeds: Vec<bool>,
     suspects: Vec<bool>,
@@ -322,8 +323,11 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
     let (frames, poses, shapes) = (&coat.frames, &coat.poses, &dressing.shapes);
     step.spheres.clear();
     step.spheres.extend((0..n).map(|j| Sphere::of(&frames[j], &shapes[j], poses[j])));
+    step.orientations.clear();
+    step.orientations.extend(frames.iter().map(orientation));
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
+    let oriented = |j: usize| Oriented { frame: &frames[j], orientation: step.orientations[j] };
     for i in 0..n {
         if !coat.staleness.pending(i) {
             continue;
@@ -331,14 +335,14 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
         let here = &frames[i];
         let nearest = nb.neighbours_of(i as u32).iter().map(|&j| {
             let there = &frames[j as usize];
-            Placement::of(here, j, there, here.position.distance(there.position))
+            Placement::of(oriented(i), j, oriented(j as usize), here.position.distance(there.position))
         });
         let footprint = Footprint::of(&shapes[i], &dressing.adjust_params);
         let row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
         let resting = row
             .iter()
             .filter(|&&j| ranks[j as usize] < ranks[i] && footprint.reached_by(here, spheres[j as usize]))
-            .map(|&j| Placement::of(here, j, &frames[j as usize], shapes[j as usize].length));
+            .map(|&j| Placement::of(oriented(i), j, oriented(j as usize), shapes[j as usize].length));
         coat.staleness.record(i, nearest.chain(resting));
     }
 }
@@ -357,6 +361,12 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
     let n = dressing.len();
     step.displacement.resize(n, 0.0);
     step.net.resize(n, 0.0);
+    step.orientations.clear();
+    if net {
+        step.orientations.extend(frames.iter().map(orientation));
+    }
+    let orientations = &step.orientations;
+    let oriented = |j: usize| Oriented { frame: &frames[j], orientation: orientations[j] };
     let outputs = step.displacement.par_iter_mut().zip(step.net.par_iter_mut());
     outputs.enumerate().with_min_len(128).for_each(|(i, (out, moved_net))| {
         let (here, frame) = (&maps[i], &frames[i]);
@@ -375,7 +385,8 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
         *out = worst;
         if net {
             let placements = staleness.placements(i);
-            *moved_net = placements.iter().map(|p| p.moved(frame, &frames[p.other as usize])).fold(0.0f32, f32::max);
+            *moved_net =
+                placements.iter().map(|p| p.moved(oriented(i), oriented(p.other as usize))).fold(0.0f32, f32::max);
         }
     });
 }
