@@ -56,6 +56,11 @@ use crate::stats::FrameReport;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// Displacement of a feather's surroundings, as a fraction of its length,
+/// below which it is taken for rounding noise (a rigid motion) and the
+/// feather is not checked.
+const MOVED_AT_ALL: f32 = 1e-6;
+
 /// Buffers of the frame update, reused every frame.
 #[derive(Debug, Default)]
 pub struct StepWorkspace {
@@ -130,8 +135,9 @@ pub fn step_coat(
     step.verified.reserve(n.saturating_sub(step.verified.len()));
     step.adjusted.reserve(n.saturating_sub(step.adjusted.len()));
     step.suspects.clear();
-    step.suspects
-        .extend(step.displacement.iter().enumerate().map(|(i, &d)| verify && d > 1e-6 * dressing.shapes[i].length));
+    step.suspects.extend(
+        step.displacement.iter().enumerate().map(|(i, &d)| verify && d > MOVED_AT_ALL * dressing.shapes[i].length),
+    );
 
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, ..FrameReport::default() };
@@ -370,6 +376,9 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
     let outputs = step.displacement.par_iter_mut().zip(step.net.par_iter_mut());
     outputs.enumerate().with_min_len(128).for_each(|(i, (out, moved_net))| {
         let (here, frame) = (&maps[i], &frames[i]);
+        // With the net rule the displacement only tells whether anything
+        // moved at all (a suspect), so the first that did is enough.
+        let enough = if net { MOVED_AT_ALL * dressing.shapes[i].length } else { f32::INFINITY };
         let mut worst = 0.0f32;
         for &j in nb.neighbours_of(i as u32) {
             let j = j as usize;
@@ -377,6 +386,9 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
         }
         let row = offsets[i] as usize..offsets[i + 1] as usize;
         for (e, &j) in row.clone().zip(&indices[row]) {
+            if worst > enough {
+                break;
+            }
             let j = j as usize;
             if contacts.touching(e) & (ranks[j] < ranks[i]) {
                 worst = worst.max(here.relative(&maps[j]).at(dressing.shapes[j].length));
