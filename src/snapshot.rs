@@ -7,8 +7,10 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::rng::mix64;
 
 const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
-/// Version of the payload layout; bump on any change.
-pub(crate) const FORMAT_VERSION: u32 = 3;
+/// Version of the payload layout; bump on any change. 4: the staleness
+/// keeps each feather's recorded placements (net motion); blobs of 3 and
+/// earlier are refused.
+pub(crate) const FORMAT_VERSION: u32 = 4;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 
@@ -204,6 +206,15 @@ mod tests {
         assert_eq!(v, [1.0, 2.5, -3.0]);
         assert_eq!(r.f64().unwrap(), 0.25);
         r.finish().unwrap();
+    }
+
+    #[test]
+    fn an_older_format_is_refused_by_name() {
+        let mut blob = sample();
+        blob[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let err = Reader::open(&blob, 42).err().unwrap();
+        assert_eq!(err.kind(), ErrorKind::InvalidState);
+        assert!(err.to_string().contains("state format 3 is not the supported 4"), "{err}");
     }
 
     #[test]

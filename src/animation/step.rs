@@ -3,8 +3,8 @@
 //! 1. re-pose every root from the deformed mesh; feathers keep their pitch
 //!    and roll relative to their own frame (incremental: neighbourhoods and
 //!    obstacle candidates follow the current pose);
-//! 2. `R_k`: feathers whose surroundings moved relative to them, summed
-//!    since they were last adjusted ([`super::motion::Staleness`]), by more
+//! 2. `R_k`: feathers whose surroundings moved relative to them since they
+//!    were last adjusted ([`super::motion::Staleness`]), by more
 //!    than `θs·L` (a feather's tip moves that far when its pitch changes by
 //!    θs, the change the propagation rule already lets pass). The
 //!    surroundings are the k nearest roots (their priorities) and the
@@ -27,16 +27,22 @@
 //! against its obstacles at their final poses and the skin, and readjusted
 //! only if the check fails ([`Selection::Verify`]). The readjustments that
 //! remain are for drift: the seeds are the feathers whose surroundings
-//! moved by more than the drift tolerance times their length, and
+//! moved by more than the drift tolerance times their length (net: the
+//! surroundings recorded when the feather was last adjusted, compared
+//! with where they lie now; see [`super::motion`]), and
 //! propagation passes on a feather sinking, shrinking or rolling by more
 //! than the drift tolerance (one that rises into what lies on it fails
-//! their checks). A feather whose obstacles changed with the order is a
-//! seed only when it lost one (it may have rested on it); one that only
-//! gained obstacles is checked. `R_k` (at θs) still selects the pairs
-//! whose priorities are recomputed.
+//! their checks). A feather whose obstacles changed with the order is
+//! checked, not readjusted: one that gained an obstacle fails its check if
+//! the newcomer meets it, and one that lost an obstacle it rested on (now
+//! later in the order, so adjusted over it) is left at its pose as long as
+//! that stays clear. On the Flamingo clip (2 000 feathers, 42 frames) this
+//! took the readjustments from 592 to 485 a frame, and the mean pitch from
+//! +0.21° to +0.27° over rebuild's, with 0 pairs and penetrations. `R_k` (at θs, by the same net motion)
+//! still selects the pairs whose priorities are recomputed.
 
-use super::contact::Contacts;
-use super::motion::{RootMap, root_maps};
+use super::contact::{Contacts, Footprint, Sphere};
+use super::motion::{Oriented, Placement, RootMap, orientation, root_maps};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
 use crate::body::BodyIndex;
@@ -50,6 +56,11 @@ use crate::stats::FrameReport;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// Displacement of a feather's surroundings, as a fraction of its length,
+/// below which it is taken for rounding noise (a rigid motion) and the
+/// feather is not checked.
+const MOVED_AT_ALL: f32 = 1e-6;
+
 /// Buffers of the frame update, reused every frame.
 #[derive(Debug, Default)]
 pub struct StepWorkspace {
@@ -59,6 +70,9 @@ pub struct StepWorkspace {
     previous_indices: Vec<u32>,
     maps: Vec<RootMap>,
     displacement: Vec<f32>,
+    net: Vec<f32>,
+    orientations: Vec<glam::Quat>,
+    spheres: Vec<Sphere>,
     seeds: Vec<bool>,
     suspects: Vec<bool>,
     no_suspects: Vec<bool>,
@@ -81,12 +95,17 @@ pub fn step_coat(
     let start = Instant::now();
     let n = dressing.len();
     let incremental = dressing.mode == Mode::Incremental;
-    // 1. Re-pose; remember where everything was.
-    remember(coat, step);
-    coat.pose(dressing, positions);
+    // 1. Record where the surroundings of the feathers adjusted last lie;
+    // re-pose; remember where everything was.
     if coat.staleness.len() != n {
         coat.staleness.reset(n);
     }
+    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
+    if verify {
+        record_placements(coat, dressing, step);
+    }
+    remember(coat, step);
+    coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     if incremental && dressing.recompute_neighbourhoods {
         coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
@@ -97,13 +116,17 @@ pub fn step_coat(
 
     // 2. R_k from the relative motion of the roots since the last frame.
     root_maps(&step.previous_frames, &coat.frames, &mut step.maps);
-    surroundings_displacement(coat, dressing, step);
+    surroundings_displacement(coat, dressing, step, verify);
     step.seeds.clear();
     step.seeds.resize(n, false);
-    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
     let drift = if verify { dressing.drift_tolerance } else { dressing.theta_s };
     let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
-    coat.staleness.add(&step.displacement, |i| drift * dressing.shapes[i].length, &mut step.seeds);
+    let drift_limit = |i: usize| drift * dressing.shapes[i].length;
+    if verify {
+        coat.staleness.set_net(&step.net, drift_limit, &mut step.seeds);
+    } else {
+        coat.staleness.add(&step.displacement, drift_limit, &mut step.seeds);
+    }
     step.r_k.clear();
     step.r_k.extend((0..n as u32).filter(|&i| coat.staleness.moved()[i as usize] > limit(i as usize)));
     // The second pass's buffers, sized now: the first frame that needs
@@ -112,8 +135,9 @@ pub fn step_coat(
     step.verified.reserve(n.saturating_sub(step.verified.len()));
     step.adjusted.reserve(n.saturating_sub(step.adjusted.len()));
     step.suspects.clear();
-    step.suspects
-        .extend(step.displacement.iter().enumerate().map(|(i, &d)| verify && d > 1e-6 * dressing.shapes[i].length));
+    step.suspects.extend(
+        step.displacement.iter().enumerate().map(|(i, &d)| verify && d > MOVED_AT_ALL * dressing.shapes[i].length),
+    );
 
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, ..FrameReport::default() };
@@ -291,40 +315,100 @@ fn remember(coat: &Coat, step: &mut StepWorkspace) {
     step.previous_indices.extend_from_slice(indices);
 }
 
+/// Records, for each feather adjusted since the last record (all of them
+/// after a solve), where its surroundings lie in its frame at the pose the
+/// coat holds, the pose it was adjusted at: its k nearest roots (turns
+/// measured at their distance), then its earlier candidates lying over its
+/// footprint (at their length), those of [`surroundings_displacement`], as
+/// many as there are slots.
+fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorkspace) {
+    let n = dressing.len();
+    if coat.frames.len() != n || !(0..n).any(|i| coat.staleness.pending(i)) {
+        return;
+    }
+    let (frames, poses, shapes) = (&coat.frames, &coat.poses, &dressing.shapes);
+    step.spheres.clear();
+    step.spheres.extend((0..n).map(|j| Sphere::of(&frames[j], &shapes[j], poses[j])));
+    step.orientations.clear();
+    step.orientations.extend(frames.iter().map(orientation));
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
+    let oriented = |j: usize| Oriented { frame: &frames[j], orientation: step.orientations[j] };
+    for i in 0..n {
+        if !coat.staleness.pending(i) {
+            continue;
+        }
+        let here = &frames[i];
+        let nearest = nb.neighbours_of(i as u32).iter().map(|&j| {
+            let there = &frames[j as usize];
+            Placement::of(oriented(i), j, oriented(j as usize), here.position.distance(there.position))
+        });
+        let footprint = Footprint::of(&shapes[i], &dressing.adjust_params);
+        let row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
+        let resting = row
+            .iter()
+            .filter(|&&j| ranks[j as usize] < ranks[i] && footprint.reached_by(here, spheres[j as usize]))
+            .map(|&j| Placement::of(oriented(i), j, oriented(j as usize), shapes[j as usize].length));
+        coat.staleness.record(i, nearest.chain(resting));
+    }
+}
+
 /// For each feather, how far its surroundings moved relative to it since
-/// the last frame: over its k nearest roots j, the displacement at the
-/// distance between the roots (what their priority difference sees); over
-/// its earlier candidates lying over its footprint, the displacement at
-/// their length (what its height field sees).
-fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace) {
+/// the last frame (`displacement`): over its k nearest roots j, the
+/// displacement at the distance between the roots (what their priority
+/// difference sees); over its earlier candidates lying over its footprint,
+/// the displacement at their length (what its height field sees). With
+/// `net`, also how far the surroundings recorded when it was last adjusted
+/// moved since (`net`, the staleness of the verifying mode).
+fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace, net: bool) {
     let (maps, frames, ranks, contacts) = (&step.maps, &coat.frames, &step.previous_ranks, &step.contacts);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    let nb = &coat.neighbourhoods;
-    step.displacement.resize(dressing.len(), 0.0);
-    step.displacement.par_iter_mut().enumerate().with_min_len(128).for_each(|(i, out)| {
-        let here = &maps[i];
+    let (nb, staleness) = (&coat.neighbourhoods, &coat.staleness);
+    let n = dressing.len();
+    step.displacement.resize(n, 0.0);
+    step.net.resize(n, 0.0);
+    step.orientations.clear();
+    if net {
+        step.orientations.extend(frames.iter().map(orientation));
+    }
+    let orientations = &step.orientations;
+    let oriented = |j: usize| Oriented { frame: &frames[j], orientation: orientations[j] };
+    let outputs = step.displacement.par_iter_mut().zip(step.net.par_iter_mut());
+    outputs.enumerate().with_min_len(128).for_each(|(i, (out, moved_net))| {
+        let (here, frame) = (&maps[i], &frames[i]);
+        // With the net rule the displacement only tells whether anything
+        // moved at all (a suspect), so the first that did is enough.
+        let enough = if net { MOVED_AT_ALL * dressing.shapes[i].length } else { f32::INFINITY };
         let mut worst = 0.0f32;
         for &j in nb.neighbours_of(i as u32) {
             let j = j as usize;
-            worst = worst.max(here.relative(&maps[j]).at(frames[i].position.distance(frames[j].position)));
+            worst = worst.max(here.relative(&maps[j]).at(frame.position.distance(frames[j].position)));
         }
         let row = offsets[i] as usize..offsets[i + 1] as usize;
         for (e, &j) in row.clone().zip(&indices[row]) {
+            if worst > enough {
+                break;
+            }
             let j = j as usize;
             if contacts.touching(e) & (ranks[j] < ranks[i]) {
                 worst = worst.max(here.relative(&maps[j]).at(dressing.shapes[j].length));
             }
         }
         *out = worst;
+        if net {
+            let placements = staleness.placements(i);
+            *moved_net =
+                placements.iter().map(|p| p.moved(oriented(i), oriented(p.other as usize))).fold(0.0f32, f32::max);
+        }
     });
 }
 
 /// Adds to the seeds every feather whose obstacles changed with the order
 /// or the candidate lists: a candidate lying over its footprint that was
-/// earlier and no longer is, or the other way round. Verifying, a feather
-/// that only gained obstacles is a suspect instead: the exact check against
-/// its obstacles at their final poses finds whether the new ones meet it,
-/// and nothing it rested on went away.
+/// earlier and no longer is, or the other way round. Verifying, such a
+/// feather is a suspect instead: the exact check against its obstacles at
+/// their final poses finds whether a new one meets it, and one that went
+/// away only leaves it higher than needed (module notes).
 fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (old_offsets, old_indices) = (&step.previous_offsets, &step.previous_indices);
@@ -337,24 +421,26 @@ fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
         .zip(step.suspects.par_iter_mut())
         .enumerate()
         .with_min_len(128)
-        .filter(|(_, (s, _))| !**s)
+        // Verifying, a change only makes a suspect, and a feather whose
+        // surroundings moved at all is one already.
+        .filter(|(_, (s, v))| !(**s || verify && **v))
         .for_each(|(i, (seed, suspect))| {
             let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
             let old_row =
                 if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
             let footprint = contacts.footprint(i);
-            let mut gained = false;
+            let mut changed = false;
             let lost = status_changes(old_row, new_row, |j, in_old, in_new| {
                 let was = in_old && old_rank[j] < old_rank[i];
                 let is = in_new && rank[j] < rank[i];
                 if was == is || !footprint.reached_by(&frames[i], contacts.sphere(j)) {
                     return false;
                 }
-                gained |= is;
-                was || !verify
+                changed = true;
+                !verify
             });
             *seed = lost;
-            *suspect |= gained;
+            *suspect |= changed;
         });
 }
 
