@@ -149,9 +149,7 @@ pub(crate) fn adjust_feather_boxed(
             if relaxed && choice.too_steep {
                 break;
             }
-            if !choice.too_steep
-                && exact_check(frame, shape, choice.pose, boxes, body, scratch, relaxed, &mut hints)
-            {
+            if !choice.too_steep && exact_check(frame, shape, choice.pose, boxes, body, scratch, relaxed, &mut hints) {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
                 }
@@ -184,9 +182,7 @@ pub(crate) fn adjust_feather_boxed(
         Some(choice) => (choice.pose.scale, SWEEP_MAX_PITCH.min(params.max_pitch)),
         None => (0.0, params.max_pitch),
     };
-    if let Some(pose) =
-        exact_pitch_sweep(frame, shape, params, boxes, body, scratch, smallest, max_pitch, &mut hints)
-    {
+    if let Some(pose) = exact_pitch_sweep(frame, shape, params, boxes, body, scratch, smallest, max_pitch, &mut hints) {
         return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0 };
     }
     match found {
