@@ -675,34 +675,44 @@ fn adjust_one(
         }
         verify = true;
     }
-    worker.obstacles.clear();
+    // The ids first: a check needs only them (and the prepared boxes);
+    // the triangles are copied out only for a feather that is adjusted.
     worker.obstacle_ids.clear();
-    let ids = &mut worker.obstacle_ids;
-    worker.obstacles.extend(earlier.filter_map(|j| {
-        let (centre, radius) = posed.spheres[j];
-        let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness)?;
-        ids.push(j as u32);
-        Some(ObstacleFeather {
-            triangles: posed.triangles[j],
-            thickness: inputs.shapes[j].thickness,
-            // Out of the column, rasterising would find nothing.
-            far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
-        })
-    }));
+    worker.obstacle_ids.extend(
+        earlier
+            .filter(|&j| {
+                let (centre, radius) = posed.spheres[j];
+                reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+            })
+            .map(|j| j as u32),
+    );
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
     if verify {
         let clear = if inputs.pairs_only {
             let mine = feather_triangles(frame, shape, poses[i]);
             let mine = FeatherBoxes::new(&mine);
-            !worker.obstacles.iter().any(|o| mine.intersects(&o.triangles))
+            !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
         } else {
+            let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
             pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
         };
         if clear {
             return Visit::Verified;
         }
     }
+    worker.obstacles.clear();
+    worker.obstacles.extend(worker.obstacle_ids.iter().map(|&j| {
+        let j = j as usize;
+        let (centre, radius) = posed.spheres[j];
+        let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness) == Some(true);
+        ObstacleFeather {
+            triangles: posed.triangles[j],
+            thickness: inputs.shapes[j].thickness,
+            // Out of the column, rasterising would find nothing.
+            far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+        }
+    }));
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
     Visit::Adjusted(adjust_feather_boxed(
         &inputs.frames[i],
         &inputs.shapes[i],
