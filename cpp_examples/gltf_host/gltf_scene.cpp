@@ -267,6 +267,33 @@ void GltfScene::load_primitive(const tinygltf::Model& model, size_t index, size_
     if (skinned()) load_skin_weights(model, index, offset);
 }
 
+std::vector<float> GltfScene::vertex_attribute(const tinygltf::Model& model, const std::string& name, int first, int components) const {
+    const tinygltf::Mesh& mesh = model.meshes[static_cast<size_t>(mesh_index_)];
+    std::vector<float> out;
+    out.reserve(vertex_count() * static_cast<size_t>(components));
+    for (size_t i = 0; i < mesh.primitives.size(); ++i) {
+        const tinygltf::Primitive& p = mesh.primitives[i];
+        if (!is_triangle_mode(p.mode)) continue;  // as load_mesh: only triangles are dressed
+        const std::string what = "mesh " + mesh_name_ + " primitive " + std::to_string(i);
+        const int acc = attribute(p, name);
+        if (acc < 0) throw UsageError(what + " has no vertex attribute " + name);
+        const AccessorData data = read_accessor(model, acc, what + " " + name);
+        if (data.components < first + components) {
+            throw UsageError(what + " " + name + " has " + std::to_string(data.components) + " components per vertex, " + std::to_string(first + components) +
+                             " needed");
+        }
+        if (data.count != accessor_count(model, attribute(p, "POSITION"))) throw InputError(what + " " + name + ": count differs from POSITION");
+        for (size_t v = 0; v < data.count; ++v) {
+            for (int c = 0; c < components; ++c) out.push_back(static_cast<float>(data.at(v, first + c)));
+        }
+    }
+    if (out.size() != vertex_count() * static_cast<size_t>(components)) throw InputError("vertex attribute " + name + ": not one value per vertex");
+    for (float x : out) {
+        if (!std::isfinite(x)) throw InputError("vertex attribute " + name + " holds a value that is not finite");
+    }
+    return out;
+}
+
 void GltfScene::load_skin(const tinygltf::Model& model, int skin) {
     if (static_cast<size_t>(skin) >= model.skins.size()) throw InputError("node " + std::to_string(instance_node_) + " names a missing skin");
     const tinygltf::Skin& s = model.skins[static_cast<size_t>(skin)];

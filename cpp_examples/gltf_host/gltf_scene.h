@@ -31,6 +31,13 @@ public:
     std::optional<ClipInfo> clip() const override;
     void pose_at(double seconds, std::vector<float>& xyz) const override;
 
+    // Vertex attribute `name` of the dressed mesh (the `model` it was read
+    // from), in the order of rest_positions(): `components` values per
+    // vertex from component `first`. Throws UsageError when a triangle
+    // primitive lacks the attribute or has too few components, InputError
+    // for unreadable or non-finite data.
+    std::vector<float> vertex_attribute(const tinygltf::Model& model, const std::string& name, int first, int components) const;
+
     int mesh_index() const { return mesh_index_; }
     bool skinned() const { return !joints_.empty(); }
     size_t morph_target_count() const { return target_deltas_.size(); }

@@ -22,8 +22,21 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::unique_ptr<AnimatedMesh> open_subject(const Options& opt) {
-    if (!opt.input.empty()) return std::make_unique<GltfScene>(load_gltf_file(opt.input), opt.mesh, opt.animation);
+// The vertex attributes the options name, read from the dressed mesh.
+VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const Options& opt) {
+    const auto read = [&](const VertexMapSpec& m) {
+        return m.attribute.empty() ? std::vector<float>{} : scene.vertex_attribute(model, m.attribute, m.first, 1);
+    };
+    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map)};
+}
+
+std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps) {
+    if (!opt.input.empty()) {
+        const tinygltf::Model model = load_gltf_file(opt.input);
+        auto scene = std::make_unique<GltfScene>(model, opt.mesh, opt.animation);
+        maps = read_maps(*scene, model, opt);
+        return scene;
+    }
     const auto [rings, segments] = opt.model_resolution.value_or(std::array<uint32_t, 2>{ProceduralBody::kRings, ProceduralBody::kSegments});
     auto body = std::make_unique<ProceduralBody>(static_cast<int>(rings), static_cast<int>(segments));
     if (!opt.mesh.empty() && opt.mesh != body->mesh_name() && opt.mesh != "0") throw UsageError("--mesh " + opt.mesh + ": the built-in model has one mesh, procedural_body");
@@ -68,6 +81,10 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
     j["frames"] = frames;
     j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
                           : nlohmann::ordered_json(nullptr);
+    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}};
+    for (const auto& [key, m] : maps) {
+        if (!m->attribute.empty()) j[key] = m->attribute + ":" + std::to_string(m->first);
+    }
     j["validate"] = validate_name(opt.validate);
     j["plumage_version"] = plumage_version();
     return j;
@@ -80,7 +97,7 @@ class Session {
 public:
     explicit Session(const Options& opt) : opt_(opt) {
         const Stopwatch load_clock;
-        subject_ = open_subject(opt_);
+        subject_ = open_subject(opt_, maps_);
         report_.set_timing("load_seconds", load_clock.seconds());
         report_.set_memory("after_load", memory_usage());
         clip_ = subject_->clip();
@@ -95,7 +112,7 @@ public:
                             subject_->triangle_count(), run_config(cfg, opt_, clip_, times_.size()));
         progress_.set_context("rest pose");
         const Stopwatch create_clock;
-        sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles());
+        sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles(), maps_);
         report_.set_timing("create_seconds", create_clock.seconds());
         report_.set_memory("after_create", memory_usage());
         check(plumage_system_feather_count(sys_.get(), &feather_count_), sys_.get(), "plumage_system_feather_count");
@@ -153,6 +170,7 @@ private:
     const Options& opt_;
     Stopwatch total_;
     std::unique_ptr<AnimatedMesh> subject_;
+    VertexMaps maps_;
     std::optional<ClipInfo> clip_;
     std::vector<double> times_;
     Report report_;

@@ -71,6 +71,22 @@ std::array<uint32_t, 2> parse_resolution(const std::string& option, const std::s
     return v;
 }
 
+// NAME or NAME:C (C = 0..3, the component of a vector attribute; default 0).
+VertexMapSpec parse_map(const std::string& option, const std::string& text) {
+    VertexMapSpec m;
+    m.option = option;
+    m.attribute = text;
+    const size_t colon = text.rfind(':');
+    if (colon != std::string::npos) {
+        const std::string c = text.substr(colon + 1);
+        if (c.size() != 1 || c[0] < '0' || c[0] > '3') bad(option, text, "NAME or NAME:C with C from 0 to 3");
+        m.first = c[0] - '0';
+        m.attribute.resize(colon);
+    }
+    if (m.attribute.empty()) bad(option, text, "a vertex attribute name");
+    return m;
+}
+
 template <size_t N>
 uint32_t parse_choice(const std::string& option, const std::string& text, const char* const (&names)[N], const uint32_t (&values)[N]) {
     std::string want;
@@ -84,7 +100,8 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
-                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness"};
+                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness",
+                                           "--spacing-map", "--length-map", "--width-map"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -132,6 +149,9 @@ std::string usage_text() {
            "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
            "                       (default 0.4; 1 = uniform spacing)\n"
            "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
+           "  --spacing-map NAME[:C]   per-vertex spacing multiplier from vertex attribute NAME (component C of a\n"
+           "                       vector, default 0; e.g. _FEATHER_DENSITY or COLOR_0:0): 2 = half as dense, 0 = bare skin\n"
+           "  --length-map NAME[:C]  --width-map NAME[:C]   per-vertex feather length and width multipliers\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
            "  --report FILE.json   write the machine-readable report\n"
@@ -191,12 +211,18 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--validate") {
             const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});
             o.validate = v == 0 ? ValidateWhen::Every : v == 1 ? ValidateWhen::Last : ValidateWhen::None;
-        } else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
+        } else if (arg == "--spacing-map") o.spacing_map = parse_map(arg, value);
+        else if (arg == "--length-map") o.length_map = parse_map(arg, value);
+        else if (arg == "--width-map") o.width_map = parse_map(arg, value);
+        else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
+    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map}) {
+        if (!m->attribute.empty() && o.input.empty()) throw UsageError(m->option + " reads a vertex attribute of a glTF input; the built-in model has none");
+    }
     if (o.model_resolution && !o.input.empty()) throw UsageError("--model-resolution applies to the built-in model only, not to " + o.input);
     return o;
 }

@@ -10,6 +10,14 @@ namespace plumage_host {
 
 enum class ValidateWhen { Every, Last, None };
 
+// A per-vertex multiplier read from a vertex attribute of the glTF mesh:
+// component `first` of `attribute` (0 for a scalar attribute).
+struct VertexMapSpec {
+    std::string attribute;  // empty: no map
+    int first = 0;
+    std::string option;  // the option that asked for it (for messages)
+};
+
 struct Options {
     std::string input;  // empty: the built-in procedural model
     std::optional<std::array<uint32_t, 2>> model_resolution;  // rings, segments of the built-in model
@@ -30,6 +38,10 @@ struct Options {
     std::optional<float> curvature_min_scale;
     std::optional<float> fluffiness_deg;
     std::optional<uint32_t> threads;
+    // Per-vertex maps from vertex attributes (glTF input only).
+    VertexMapSpec spacing_map;
+    VertexMapSpec length_map;
+    VertexMapSpec width_map;
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;
     std::string report;

@@ -54,13 +54,19 @@ void check_abi() {
     }
 }
 
-SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices) {
+SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                           const VertexMaps& maps) {
     PlumageMeshDesc mesh;
     plumage_mesh_desc_init(&mesh);
     mesh.positions = positions.data();
     mesh.vertex_count = positions.size() / 3;
     mesh.indices = indices.data();
     mesh.triangle_count = indices.size() / 3;
+    // The library checks each map's length against the vertex count.
+    const auto map = [](const std::vector<float>& m) { return m.empty() ? nullptr : m.data(); };
+    mesh.spacing_scale = map(maps.spacing);
+    mesh.length_scale = map(maps.length);
+    mesh.width_scale = map(maps.width);
     PlumageSystem* raw = nullptr;
     const uint32_t status = plumage_system_create(&cfg, &mesh, &raw);
     SystemHandle sys(raw);  // owned before anything can throw

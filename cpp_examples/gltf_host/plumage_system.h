@@ -38,7 +38,16 @@ void check(uint32_t status, const PlumageSystem* sys, const char* call);
 // Fails unless the loaded library speaks this header's ABI.
 void check_abi();
 
-SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices);
+// Optional per-vertex multipliers of the mesh (empty: none): root spacing
+// (0 = bare skin), feather length and width.
+struct VertexMaps {
+    std::vector<float> spacing;
+    std::vector<float> length;
+    std::vector<float> width;
+};
+
+SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices,
+                           const VertexMaps& maps = {});
 
 std::vector<PlumageFeather> feathers(const PlumageSystem& sys);
 std::vector<float> feather_triangles(const PlumageSystem& sys);

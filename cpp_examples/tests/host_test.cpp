@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -282,6 +283,96 @@ int gltf_input() {
     return 0;
 }
 
+// A flat 24 x 12 quad sheet over x in [0, 2], z in [0, 1] facing +y, with
+// two vertex attributes that leave its left half (x < 1) bare: _DENSITY
+// (float: 0 left, 1 right) and COLOR_0 (normalized bytes: channel 0 is 1
+// everywhere, channel 1 is 0 left and 1 right). _NEGATIVE holds -1.
+GltfFixture sheet() {
+    constexpr int nx = 24, nz = 12;
+    std::vector<float> p, density, negative;
+    std::vector<uint8_t> color;
+    for (int k = 0; k <= nz; ++k) {
+        for (int i = 0; i <= nx; ++i) {
+            const float x = 2.0f * static_cast<float>(i) / nx, z = static_cast<float>(k) / nz;
+            p.insert(p.end(), {x, 0.0f, z});
+            const bool left = 2 * i < nx;
+            density.push_back(left ? 0.0f : 1.0f);
+            negative.push_back(-1.0f);
+            color.insert(color.end(), {255, static_cast<uint8_t>(left ? 0 : 255), 0, 255});
+        }
+    }
+    std::vector<uint16_t> idx;
+    for (int k = 0; k < nz; ++k) {
+        for (int i = 0; i < nx; ++i) {
+            const auto v = [&](int a, int b) { return static_cast<uint16_t>((k + b) * (nx + 1) + i + a); };
+            idx.insert(idx.end(), {v(0, 0), v(0, 1), v(1, 0), v(1, 0), v(0, 1), v(1, 1)});
+        }
+    }
+    GltfFixture f;
+    const int pos = f.floats(p, "VEC3");
+    f.bounds(pos, p, 3);
+    const json attributes = {{"POSITION", pos},
+                             {"_DENSITY", f.floats(density, "SCALAR")},
+                             {"_NEGATIVE", f.floats(negative, "SCALAR")},
+                             {"COLOR_0", f.u8(color, "VEC4", true)}};
+    f.add("meshes", {{"name", "sheet"}, {"primitives", {{{"attributes", attributes}, {"indices", f.u16(idx, "SCALAR")}}}}});
+    f.single_node_scene(0);
+    return f;
+}
+
+// The smallest x of the feathers' corners in a .glb the host wrote (mesh 1, rest pose).
+float feathers_min_x(const std::string& file) {
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    if (!loader.LoadBinaryFromFile(&m, &err, &warn, file) || m.meshes.size() < 2) {
+        check(false, "feathers in " + file + ": " + err, __LINE__);
+        return NAN;
+    }
+    const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(m.meshes[1].primitives[0].attributes.at("POSITION"))];
+    const tinygltf::BufferView& v = m.bufferViews[static_cast<size_t>(a.bufferView)];
+    CHECK(a.componentType == kFloat && a.type == TINYGLTF_TYPE_VEC3 && (v.byteStride == 0 || v.byteStride == 12));
+    const unsigned char* data = m.buffers[static_cast<size_t>(v.buffer)].data.data() + v.byteOffset + a.byteOffset;
+    float min_x = INFINITY;
+    for (size_t i = 0; i < a.count; ++i) {
+        float x = 0;
+        std::memcpy(&x, data + 12 * i, sizeof x);
+        min_x = std::min(min_x, x);
+    }
+    return min_x;
+}
+
+// Per-vertex maps read from vertex attributes reach the library: a spacing
+// map of 0 leaves the left half of the sheet bare, whether it comes from a
+// float attribute or from one channel of a normalized colour.
+int vertex_maps() {
+    sheet().write(path("sheet.glb"), GltfFormat::Glb);
+    const std::vector<std::string> common = {path("sheet.glb"), "--frames", "0", "--feathers", "120", "--flow", "1,0,0"};
+    const auto with = [&](std::vector<std::string> extra) {
+        extra.insert(extra.begin(), common.begin(), common.end());
+        return extra;
+    };
+    const json plain = dress("sheet_plain", with({}), 0);
+    const float plain_min = feathers_min_x(path("sheet_plain.glb"));
+    CHECK_MSG(plain_min < 0.3f, std::to_string(plain_min));
+    CHECK(!plain["config"].contains("spacing_map"));
+    // Feathers point along +x from their roots, so no corner lies left of a root.
+    const json density = dress("sheet_density", with({"--spacing-map", "_DENSITY"}), 0);
+    CHECK(density["config"].value("spacing_map", "") == "_DENSITY:0");
+    const float density_min = feathers_min_x(path("sheet_density.glb"));
+    CHECK_MSG(density_min > 0.9f, std::to_string(density_min));
+    CHECK(density.value("feathers", 0) > 0);
+    const json colour = dress("sheet_colour", with({"--spacing-map", "COLOR_0:1", "--length-map", "COLOR_0:0", "--width-map", "_DENSITY"}), 0);
+    CHECK(colour["config"].value("spacing_map", "") == "COLOR_0:1" && colour["config"].value("width_map", "") == "_DENSITY:0");
+    const float colour_min = feathers_min_x(path("sheet_colour.glb"));
+    CHECK_MSG(colour_min > 0.9f, std::to_string(colour_min));
+    // What cannot be used is refused, with the attribute named.
+    EXPECT_REFUSAL(run_host(with({"--spacing-map", "_NOPE"})), 2, "no vertex attribute _NOPE");
+    EXPECT_REFUSAL(run_host(with({"--length-map", "_DENSITY:1"})), 2, "1 components per vertex, 2 needed");
+    EXPECT_REFUSAL(run_host(with({"--width-map", "_NEGATIVE"})), 4, "width_scale");
+    return 0;
+}
+
 int truncated() {
     cube().write(path("whole.glb"), GltfFormat::Glb);
     const std::string bytes = slurp(path("whole.glb"));
@@ -334,6 +425,9 @@ int bad_options() {
         {{"--model-resolution", "10"}, "RINGS,SEGMENTS"},
         {{"--model-resolution", "10,5000"}, "--model-resolution"},
         {{"in.glb", "--model-resolution", "10,8"}, "built-in model only"},
+        {{"--spacing-map", "_DENSITY"}, "the built-in model has none"},
+        {{"in.glb", "--length-map", "COLOR_0:7"}, "NAME:C"},
+        {{"in.glb", "--width-map", ":1"}, "vertex attribute name"},
     };
     for (const auto& c : cases) EXPECT_REFUSAL(run_host(c.first), 2, c.second);
     return 0;
@@ -368,6 +462,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"fox", [] { return model("Fox.glb", "Mesh", 1728); }},
     {"bird", [] { return model("bird.glb", "Plane", 338); }},
     {"gltf_input", gltf_input},
+    {"vertex_maps", vertex_maps},
     {"truncated", truncated},
     {"not_gltf", not_gltf},
     {"missing", missing},
