@@ -418,35 +418,53 @@ std::vector<double> GltfScene::morphed_positions(const std::vector<double>& weig
 }
 
 // Linear blend skinning; the skinned node's own transform is ignored (glTF 2.0, 3.7.3.3).
-void GltfScene::skin_positions(const std::vector<Mat4>& global, const std::vector<double>& p, std::vector<float>& xyz) const {
+// The maps that carry the mesh's own space to the scene: one per joint for
+// a skinned mesh (the joint's global transform times its inverse bind
+// matrix), else the instancing node's global transform.
+std::vector<Mat4> GltfScene::vertex_maps(const std::vector<Mat4>& global) const {
+    if (!skinned()) return {instance_node_ >= 0 ? global[static_cast<size_t>(instance_node_)] : Mat4{}};
     std::vector<Mat4> joint(joints_.size());
     for (size_t j = 0; j < joints_.size(); ++j) joint[j] = global[static_cast<size_t>(joints_[j])] * inverse_bind_[j];
-    for (size_t v = 0; v < p.size() / 3; ++v) {
-        const Vec3 rest{p[3 * v], p[3 * v + 1], p[3 * v + 2]};
-        Vec3 out = influence_begin_[v] == influence_begin_[v + 1] ? rest : Vec3{};  // no influence: left in place
-        for (size_t k = influence_begin_[v]; k < influence_begin_[v + 1]; ++k) {
-            const Vec3 q = transform_point(joint[influences_[k].joint], rest);
-            const double w = influences_[k].weight;
-            out = {out.x + w * q.x, out.y + w * q.y, out.z + w * q.z};
-        }
-        store(out, v, xyz);
+    return joint;
+}
+
+// Vertex v at mesh-space position p, carried by `maps` (see vertex_maps):
+// skinned by its influences, or placed by the node.
+Vec3 GltfScene::posed_vertex(size_t v, const Vec3& p, const std::vector<Mat4>& maps) const {
+    if (!skinned()) return transform_point(maps[0], p);
+    Vec3 out = influence_begin_[v] == influence_begin_[v + 1] ? p : Vec3{};  // no influence: left in place
+    for (size_t k = influence_begin_[v]; k < influence_begin_[v + 1]; ++k) {
+        const Vec3 q = transform_point(maps[influences_[k].joint], p);
+        const double w = influences_[k].weight;
+        out = {out.x + w * q.x, out.y + w * q.y, out.z + w * q.z};
     }
+    return out;
 }
 
 void GltfScene::evaluate(const Clip* clip, double seconds, std::vector<float>& xyz) const {
     std::vector<NodeTransform> local = nodes_;
     std::vector<double> weights = base_weights_;
     if (clip != nullptr) apply_clip(*clip, seconds, local, weights);
-    const std::vector<Mat4> global = global_transforms(local);
     // Morph first, in the mesh's own space; then skin, or place by the node.
+    const std::vector<Mat4> maps = vertex_maps(global_transforms(local));
     const std::vector<double> p = morphed_positions(weights);
     xyz.resize(p.size());
-    if (skinned()) {
-        skin_positions(global, p, xyz);
-        return;
+    for (size_t v = 0; v < p.size() / 3; ++v) store(posed_vertex(v, {p[3 * v], p[3 * v + 1], p[3 * v + 2]}, maps), v, xyz);
+}
+
+std::vector<float> GltfScene::rest_directions(const tinygltf::Model& model, const std::string& name, int first) const {
+    const std::vector<float> mesh_space = vertex_attribute(model, name, first, 3);
+    const std::vector<Mat4> maps = vertex_maps(global_transforms(nodes_));
+    const std::vector<double> p = morphed_positions(base_weights_);
+    std::vector<float> out(mesh_space.size());
+    for (size_t v = 0; v < p.size() / 3; ++v) {
+        // Each vertex's map is affine, so T(p + d) - T(p) is its linear part applied to d.
+        const Vec3 at{p[3 * v], p[3 * v + 1], p[3 * v + 2]};
+        const Vec3 d{mesh_space[3 * v], mesh_space[3 * v + 1], mesh_space[3 * v + 2]};
+        const Vec3 a = posed_vertex(v, at, maps), b = posed_vertex(v, {at.x + d.x, at.y + d.y, at.z + d.z}, maps);
+        store({b.x - a.x, b.y - a.y, b.z - a.z}, v, out);
     }
-    const Mat4 place = instance_node_ >= 0 ? global[static_cast<size_t>(instance_node_)] : Mat4{};
-    for (size_t v = 0; v < p.size() / 3; ++v) store(transform_point(place, {p[3 * v], p[3 * v + 1], p[3 * v + 2]}), v, xyz);
+    return out;
 }
 
 }  // namespace plumage_host

@@ -38,6 +38,11 @@ public:
     // for unreadable or non-finite data.
     std::vector<float> vertex_attribute(const tinygltf::Model& model, const std::string& name, int first, int components) const;
 
+    // Directions given by vertex attribute `name` (components first to
+    // first + 2, in the mesh's own space) carried to the rest pose the way
+    // rest_positions() are: by the node transforms and the skin.
+    std::vector<float> rest_directions(const tinygltf::Model& model, const std::string& name, int first) const;
+
     int mesh_index() const { return mesh_index_; }
     bool skinned() const { return !joints_.empty(); }
     size_t morph_target_count() const { return target_deltas_.size(); }
@@ -64,7 +69,8 @@ private:
     void apply_clip(const Clip& clip, double seconds, std::vector<NodeTransform>& local, std::vector<double>& weights) const;
     std::vector<Mat4> global_transforms(const std::vector<NodeTransform>& local) const;
     std::vector<double> morphed_positions(const std::vector<double>& weights) const;
-    void skin_positions(const std::vector<Mat4>& global, const std::vector<double>& p, std::vector<float>& xyz) const;
+    std::vector<Mat4> vertex_maps(const std::vector<Mat4>& global) const;
+    Vec3 posed_vertex(size_t v, const Vec3& p, const std::vector<Mat4>& maps) const;
 
     int mesh_index_ = -1;
     std::string mesh_name_;

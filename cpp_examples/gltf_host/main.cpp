@@ -27,7 +27,9 @@ VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const
     const auto read = [&](const VertexMapSpec& m) {
         return m.attribute.empty() ? std::vector<float>{} : scene.vertex_attribute(model, m.attribute, m.first, 1);
     };
-    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map)};
+    const VertexMapSpec& flow = opt.flow_map;
+    std::vector<float> directions = flow.attribute.empty() ? std::vector<float>{} : scene.rest_directions(model, flow.attribute, flow.first);
+    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions)};
 }
 
 std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps) {
@@ -81,7 +83,7 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
     j["frames"] = frames;
     j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
                           : nlohmann::ordered_json(nullptr);
-    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}};
+    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}, {"flow_map", &opt.flow_map}};
     for (const auto& [key, m] : maps) {
         if (!m->attribute.empty()) j[key] = m->attribute + ":" + std::to_string(m->first);
     }

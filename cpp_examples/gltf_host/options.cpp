@@ -101,7 +101,7 @@ bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
                                            "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness",
-                                           "--spacing-map", "--length-map", "--width-map"};
+                                           "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -152,6 +152,8 @@ std::string usage_text() {
            "  --spacing-map NAME[:C]   per-vertex spacing multiplier from vertex attribute NAME (component C of a\n"
            "                       vector, default 0; e.g. _FEATHER_DENSITY or COLOR_0:0): 2 = half as dense, 0 = bare skin\n"
            "  --length-map NAME[:C]  --width-map NAME[:C]   per-vertex feather length and width multipliers\n"
+           "  --flow-map NAME[:C]  per-vertex flow direction from components C..C+2 of vertex attribute NAME\n"
+           "                       (e.g. a custom _FLOW), in the mesh's own space; overrides --flow and --flow-source\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
            "  --report FILE.json   write the machine-readable report\n"
@@ -214,13 +216,14 @@ Options parse_options(int argc, const char* const* argv) {
         } else if (arg == "--spacing-map") o.spacing_map = parse_map(arg, value);
         else if (arg == "--length-map") o.length_map = parse_map(arg, value);
         else if (arg == "--width-map") o.width_map = parse_map(arg, value);
+        else if (arg == "--flow-map") o.flow_map = parse_map(arg, value);
         else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
-    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map}) {
+    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map}) {
         if (!m->attribute.empty() && o.input.empty()) throw UsageError(m->option + " reads a vertex attribute of a glTF input; the built-in model has none");
     }
     if (o.model_resolution && !o.input.empty()) throw UsageError("--model-resolution applies to the built-in model only, not to " + o.input);

@@ -10,8 +10,9 @@ namespace plumage_host {
 
 enum class ValidateWhen { Every, Last, None };
 
-// A per-vertex multiplier read from a vertex attribute of the glTF mesh:
-// component `first` of `attribute` (0 for a scalar attribute).
+// A per-vertex map read from a vertex attribute of the glTF mesh, from
+// component `first` of `attribute` on (0 for a scalar attribute): one
+// value per vertex for a multiplier, three for a direction.
 struct VertexMapSpec {
     std::string attribute;  // empty: no map
     int first = 0;
@@ -42,6 +43,7 @@ struct Options {
     VertexMapSpec spacing_map;
     VertexMapSpec length_map;
     VertexMapSpec width_map;
+    VertexMapSpec flow_map;
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;
     std::string report;

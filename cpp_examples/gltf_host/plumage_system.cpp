@@ -67,6 +67,7 @@ SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& p
     mesh.spacing_scale = map(maps.spacing);
     mesh.length_scale = map(maps.length);
     mesh.width_scale = map(maps.width);
+    mesh.orientations = map(maps.flow);
     PlumageSystem* raw = nullptr;
     const uint32_t status = plumage_system_create(&cfg, &mesh, &raw);
     SystemHandle sys(raw);  // owned before anything can throw

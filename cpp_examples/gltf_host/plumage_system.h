@@ -38,12 +38,14 @@ void check(uint32_t status, const PlumageSystem* sys, const char* call);
 // Fails unless the loaded library speaks this header's ABI.
 void check_abi();
 
-// Optional per-vertex multipliers of the mesh (empty: none): root spacing
-// (0 = bare skin), feather length and width.
+// Optional per-vertex maps of the mesh (empty: none): multipliers of the
+// root spacing (0 = bare skin), feather length and width, and flow
+// directions (xyz per vertex, at the rest pose).
 struct VertexMaps {
     std::vector<float> spacing;
     std::vector<float> length;
     std::vector<float> width;
+    std::vector<float> flow;
 };
 
 SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices,

@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -286,10 +287,11 @@ int gltf_input() {
 // A flat 24 x 12 quad sheet over x in [0, 2], z in [0, 1] facing +y, with
 // two vertex attributes that leave its left half (x < 1) bare: _DENSITY
 // (float: 0 left, 1 right) and COLOR_0 (normalized bytes: channel 0 is 1
-// everywhere, channel 1 is 0 left and 1 right). _NEGATIVE holds -1.
+// everywhere, channel 1 is 0 left and 1 right). _NEGATIVE holds -1;
+// _FLOW is (0, 0, 1) in the mesh's space.
 GltfFixture sheet() {
     constexpr int nx = 24, nz = 12;
-    std::vector<float> p, density, negative;
+    std::vector<float> p, density, negative, flow;
     std::vector<uint8_t> color;
     for (int k = 0; k <= nz; ++k) {
         for (int i = 0; i <= nx; ++i) {
@@ -298,6 +300,7 @@ GltfFixture sheet() {
             const bool left = 2 * i < nx;
             density.push_back(left ? 0.0f : 1.0f);
             negative.push_back(-1.0f);
+            flow.insert(flow.end(), {0.0f, 0.0f, 1.0f});
             color.insert(color.end(), {255, static_cast<uint8_t>(left ? 0 : 255), 0, 255});
         }
     }
@@ -314,6 +317,7 @@ GltfFixture sheet() {
     const json attributes = {{"POSITION", pos},
                              {"_DENSITY", f.floats(density, "SCALAR")},
                              {"_NEGATIVE", f.floats(negative, "SCALAR")},
+                             {"_FLOW", f.floats(flow, "VEC3")},
                              {"COLOR_0", f.u8(color, "VEC4", true)}};
     f.add("meshes", {{"name", "sheet"}, {"primitives", {{{"attributes", attributes}, {"indices", f.u16(idx, "SCALAR")}}}}});
     f.single_node_scene(0);
@@ -340,6 +344,58 @@ float feathers_min_x(const std::string& file) {
         min_x = std::min(min_x, x);
     }
     return min_x;
+}
+
+// The mean shaft direction (tip - root, normalized) of the feathers in a
+// .glb the host wrote (mesh 1, rest pose; a feather's first two vertices
+// are its root and tip in both layouts).
+std::array<double, 3> mean_shaft(const std::string& file, size_t feathers) {
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    std::array<double, 3> sum{};
+    if (!loader.LoadBinaryFromFile(&m, &err, &warn, file) || m.meshes.size() < 2 || feathers == 0) {
+        check(false, "feathers in " + file + ": " + err, __LINE__);
+        return sum;
+    }
+    const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(m.meshes[1].primitives[0].attributes.at("POSITION"))];
+    const tinygltf::BufferView& v = m.bufferViews[static_cast<size_t>(a.bufferView)];
+    const unsigned char* data = m.buffers[static_cast<size_t>(v.buffer)].data.data() + v.byteOffset + a.byteOffset;
+    const size_t per = a.count / feathers;
+    CHECK(per == 4 || per == 6);
+    for (size_t f = 0; f < feathers; ++f) {
+        float root[3], tip[3];
+        std::memcpy(root, data + 12 * (f * per), sizeof root);
+        std::memcpy(tip, data + 12 * (f * per + 1), sizeof tip);
+        for (int c = 0; c < 3; ++c) sum[c] += tip[c] - root[c];
+    }
+    const double n = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+    for (double& c : sum) c /= n;
+    return sum;
+}
+
+// A flow map in the mesh's space turns with the node: the sheet's node
+// turns it a quarter turn about y, which carries the map's +z to +x, and
+// the feathers follow the map rather than the global --flow.
+int flow_map() {
+    GltfFixture f = sheet();
+    const double h = std::sqrt(0.5);
+    f.doc()["nodes"][0]["rotation"] = {0.0, h, 0.0, h};
+    f.write(path("turned.glb"), GltfFormat::Glb);
+    const std::vector<std::string> common = {path("turned.glb"), "--frames", "0", "--feathers", "120", "--flow", "0,0,1"};
+    std::vector<std::string> args = common;
+    const json plain = dress("turned_plain", args, 0);
+    const std::array<double, 3> along_axis = mean_shaft(path("turned_plain.glb"), plain.value("feathers", size_t{0}));
+    CHECK_MSG(along_axis[2] > 0.9, std::to_string(along_axis[0]) + "," + std::to_string(along_axis[2]));
+    args.insert(args.end(), {"--flow-map", "_FLOW"});
+    const json mapped = dress("turned_flow", args, 0);
+    CHECK(mapped["config"].value("flow_map", "") == "_FLOW:0");
+    const std::array<double, 3> along_map = mean_shaft(path("turned_flow.glb"), mapped.value("feathers", size_t{0}));
+    CHECK_MSG(along_map[0] > 0.9, std::to_string(along_map[0]) + "," + std::to_string(along_map[2]));
+    args = common;
+    args.insert(args.end(), {"--flow-map", "_DENSITY"});
+    EXPECT_REFUSAL(run_host(args), 2, "1 components per vertex, 3 needed");
+    return 0;
 }
 
 // Per-vertex maps read from vertex attributes reach the library: a spacing
@@ -463,6 +519,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"bird", [] { return model("bird.glb", "Plane", 338); }},
     {"gltf_input", gltf_input},
     {"vertex_maps", vertex_maps},
+    {"flow_map", flow_map},
     {"truncated", truncated},
     {"not_gltf", not_gltf},
     {"missing", missing},
