@@ -34,7 +34,7 @@
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::FeatherShape;
 use crate::geometry::RootFrame;
-use glam::{Vec2, Vec3};
+use glam::{Mat3A, Vec2, Vec3, Vec3A};
 
 /// Body triangles whose unit normal has a smaller component along the
 /// feather's normal are left out (they face away: far skin, overhangs).
@@ -294,7 +294,7 @@ impl HeightField {
     /// Rasterises an obstacle feather's two world triangles, raised by its
     /// thickness. Returns whether any cell was touched (one collision test).
     pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]; 2], thickness: f32) -> bool {
-        self.add_local_obstacle(&local_triangles(frame, triangles), thickness)
+        self.add_local_obstacle(&LocalMap::new(frame).triangles(triangles), thickness)
     }
 
     /// [`HeightField::add_obstacle`] with the triangles already in the
@@ -328,6 +328,7 @@ impl HeightField {
     pub fn add_body(&mut self, frame: &RootFrame, body: &BodyIndex) {
         let reach = self.shape.length + self.dx;
         let band = SKIN_BAND_PER_LENGTH * self.shape.length;
+        let map = LocalMap::new(frame);
         let mut ids = std::mem::take(&mut self.body_ids);
         let band_box = self.world_bounds(frame, self.body_floor, band);
         body.triangles_in_box(&band_box, &mut ids);
@@ -336,7 +337,7 @@ impl HeightField {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
                 continue;
             }
-            let local = to_local3(frame, &body.corners(t));
+            let local = map.triangle(&body.corners(t));
             rises |= local[0].z.max(local[1].z).max(local[2].z) >= 0.9 * band;
             self.rasterise(Layer::Body, local, 0.0);
         }
@@ -347,7 +348,7 @@ impl HeightField {
                 if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN || body.grid().bounds(t).overlaps(&band_box) {
                     continue;
                 }
-                let local = to_local3(frame, &body.corners(t));
+                let local = map.triangle(&body.corners(t));
                 // Triangles wholly within the band are left to the first search.
                 if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
                     self.rasterise(Layer::Body, local, 0.0);
@@ -455,16 +456,40 @@ fn min3(a: f32, b: f32, c: f32) -> f32 {
     if m < c { m } else { c }
 }
 
-/// A feather's two world triangles in the root frame's local coordinates.
-#[inline]
-pub(crate) fn local_triangles(frame: &RootFrame, t: &[[Vec3; 3]; 2]) -> [[Vec3; 3]; 2] {
-    [to_local3(frame, &t[0]), to_local3(frame, &t[1])]
+/// A root frame's map from world to local coordinates, in SIMD lanes:
+/// the same f32 operations in the same order as [`RootFrame::to_local`]'s
+/// three dot products (`(x + y) + z` per component), so the same values.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LocalMap {
+    /// Columns `(t.x, b.x, n.x)`, `(t.y, b.y, n.y)`, `(t.z, b.z, n.z)` of
+    /// the frame's tangent, binormal and normal.
+    rows: Mat3A,
+    origin: Vec3A,
 }
 
-/// A world triangle in the root frame's local coordinates.
-#[inline]
-fn to_local3(frame: &RootFrame, t: &[Vec3; 3]) -> [Vec3; 3] {
-    [frame.to_local(t[0]), frame.to_local(t[1]), frame.to_local(t[2])]
+impl LocalMap {
+    pub(crate) fn new(frame: &RootFrame) -> Self {
+        let (t, b, n) = (frame.tangent, frame.binormal, frame.normal);
+        let rows = Mat3A::from_cols(Vec3A::new(t.x, b.x, n.x), Vec3A::new(t.y, b.y, n.y), Vec3A::new(t.z, b.z, n.z));
+        Self { rows, origin: frame.position.into() }
+    }
+
+    #[inline]
+    fn point(&self, p: Vec3) -> Vec3 {
+        (self.rows * (Vec3A::from(p) - self.origin)).into()
+    }
+
+    /// A world triangle in local coordinates.
+    #[inline]
+    pub(crate) fn triangle(&self, t: &[Vec3; 3]) -> [Vec3; 3] {
+        t.map(|p| self.point(p))
+    }
+
+    /// A feather's two world triangles in local coordinates.
+    #[inline]
+    pub(crate) fn triangles(&self, t: &[[Vec3; 3]; 2]) -> [[Vec3; 3]; 2] {
+        [self.triangle(&t[0]), self.triangle(&t[1])]
+    }
 }
 
 /// Raises each cell to `min(first + k·step, cap) + raise` (k = its

@@ -27,7 +27,7 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{GridExtent, JUDGE_FRACTION, ceil_i32, floor_i32, local_triangles};
+use super::height_field::{GridExtent, JUDGE_FRACTION, LocalMap, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::{FeatherPose, FeatherShape};
@@ -482,8 +482,9 @@ fn fill_field(
     let near = || obstacles.iter().filter(|o| !o.far_side);
     let mut local = std::mem::take(&mut field.local_obstacles);
     if !refill {
+        let map = LocalMap::new(frame);
         local.clear();
-        local.extend(near().map(|o| local_triangles(frame, &o.triangles)));
+        local.extend(near().map(|o| map.triangles(&o.triangles)));
     }
     let mut collision_tests = 0u32;
     for (l, o) in local.iter().zip(near()) {
