@@ -64,8 +64,9 @@ impl Aabb {
 pub struct TriangleGrid {
     corners: Vec<[Vec3; 3]>,
     boxes: Vec<Aabb>,
-    /// The cell holding each triangle box's lowest corner.
-    low_cells: Vec<[u16; 3]>,
+    /// The cell holding each triangle box's lowest corner, packed (see
+    /// [`pack_cell`]).
+    low_cells: Vec<u64>,
     origin: Vec3,
     cell: f32,
     inv_cell: f32,
@@ -73,6 +74,22 @@ pub struct TriangleGrid {
     /// CSR: cell `c` holds `items[cell_start[c]..cell_start[c + 1]]`.
     cell_start: Vec<u32>,
     items: Vec<u32>,
+}
+
+/// One axis of a packed cell: cell coordinates stay below
+/// `MAX_CELLS_PER_AXIS`, far within 16 bits.
+const CELL_FIELD: u64 = 0xffff;
+
+/// A cell's coordinates in one word, 16 bits each (x lowest).
+#[inline]
+fn pack_cell(c: [usize; 3]) -> u64 {
+    (c[0] as u64 & CELL_FIELD) | (c[1] as u64 & CELL_FIELD) << 16 | (c[2] as u64 & CELL_FIELD) << 32
+}
+
+/// The coordinates [`pack_cell`] packed.
+#[inline]
+fn unpack_cell(p: u64) -> [usize; 3] {
+    [(p & CELL_FIELD) as usize, (p >> 16 & CELL_FIELD) as usize, (p >> 32 & CELL_FIELD) as usize]
 }
 
 /// A ray's nearest hit.
@@ -191,7 +208,7 @@ impl TriangleGrid {
         self.low_cells.clear();
         for k in 0..self.boxes.len() {
             let lo = self.cell_of(self.boxes[k].min);
-            self.low_cells.push(lo.map(|c| c as u16));
+            self.low_cells.push(pack_cell(lo));
         }
         self.cell_start.clear();
         self.cell_start.resize(ncell + 1, 0);
@@ -262,8 +279,8 @@ impl TriangleGrid {
     /// cells. Used to report each overlapping pair from exactly one cell.
     #[inline]
     pub fn first_shared_cell(&self, a: u32, b: u32) -> usize {
-        let (la, lb) = (self.low_cells[a as usize], self.low_cells[b as usize]);
-        self.cell_index([0, 1, 2].map(|k| la[k].max(lb[k]) as usize))
+        let (la, lb) = (unpack_cell(self.low_cells[a as usize]), unpack_cell(self.low_cells[b as usize]));
+        self.cell_index([0, 1, 2].map(|k| la[k].max(lb[k])))
     }
 
     /// Appends to `out` (after clearing it) every triangle whose bounding
@@ -278,15 +295,18 @@ impl TriangleGrid {
             for y in lo[1]..=hi[1] {
                 for x in lo[0]..=hi[0] {
                     let c = self.cell_index([x, y, z]);
+                    // Report from the first cell shared with the query: per
+                    // axis, max(low, lo) is this cell's coordinate. A
+                    // triangle listed here has low ≤ it, so on an axis where
+                    // the cell is the query's lowest that always holds, and
+                    // elsewhere low must equal it: one masked comparison of
+                    // the packed coordinates.
+                    let axes = [x > lo[0], y > lo[1], z > lo[2]];
+                    let mask = pack_cell(axes.map(|a| if a { CELL_FIELD as usize } else { 0 }));
+                    let here = pack_cell([x, y, z]);
                     for &t in self.cell_items(c) {
-                        // Report from the first cell shared with the query.
-                        let low = self.low_cells[t as usize];
-                        let first = [
-                            (low[0] as usize).max(lo[0]) == x,
-                            (low[1] as usize).max(lo[1]) == y,
-                            (low[2] as usize).max(lo[2]) == z,
-                        ];
-                        if first.iter().all(|&f| f) && self.boxes[t as usize].overlaps(query) {
+                        let Some(&low) = self.low_cells.get(t as usize) else { continue };
+                        if (low ^ here) & mask == 0 && self.boxes[t as usize].overlaps(query) {
                             out.push(t);
                         }
                     }

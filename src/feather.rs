@@ -146,12 +146,16 @@ impl FeatherPose {
     /// not) by roll then pitch; the result is still in local coordinates.
     #[inline]
     pub fn apply_local(&self, p: Vec3) -> Vec3 {
+        self.rotation().apply(p)
+    }
+
+    /// The rotation of [`FeatherPose::apply_local`], its sines and cosines
+    /// worked out once for several points.
+    #[inline]
+    fn rotation(&self) -> PoseRotation {
         let (sb, cb) = self.roll.sin_cos();
         let (sa, ca) = self.pitch.sin_cos();
-        // Roll about x.
-        let (x, y, z) = (p.x, p.y * cb - p.z * sb, p.y * sb + p.z * cb);
-        // Pitch about y, tip (x) towards +z.
-        Vec3::new(x * ca - z * sa, y, x * sa + z * ca)
+        PoseRotation { sb, cb, sa, ca }
     }
 
     /// The posed shaft direction in local coordinates: (cos α, 0, sin α).
@@ -182,8 +186,30 @@ pub fn feather_normal(frame: &RootFrame, pose: FeatherPose) -> Vec3 {
 /// `[root, −y corner, tip]`. Both wind so that their normal faces away from
 /// the skin when the feather lies flat.
 pub fn feather_triangles(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> [[Vec3; 3]; 2] {
-    let [root, tip, left, right] = shape.scaled(pose.scale).kite_corners().map(|p| frame.to_world(pose.apply_local(p)));
+    let rotation = pose.rotation();
+    let [root, tip, left, right] = shape.scaled(pose.scale).kite_corners().map(|p| frame.to_world(rotation.apply(p)));
     [[root, tip, left], [root, right, tip]]
+}
+
+/// Roll then pitch (see [`FeatherPose::apply_local`]) by their sines and
+/// cosines.
+#[derive(Clone, Copy, Debug)]
+struct PoseRotation {
+    sb: f32,
+    cb: f32,
+    sa: f32,
+    ca: f32,
+}
+
+impl PoseRotation {
+    #[inline]
+    fn apply(&self, p: Vec3) -> Vec3 {
+        let PoseRotation { sb, cb, sa, ca } = *self;
+        // Roll about x.
+        let (x, y, z) = (p.x, p.y * cb - p.z * sb, p.y * sb + p.z * cb);
+        // Pitch about y, tip (x) towards +z.
+        Vec3::new(x * ca - z * sa, y, x * sa + z * ca)
+    }
 }
 
 /// The posed tip position in world space.

@@ -34,7 +34,7 @@
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::FeatherShape;
 use crate::geometry::RootFrame;
-use glam::{Vec2, Vec3};
+use glam::{Mat3A, Vec2, Vec3, Vec3A};
 
 /// Body triangles whose unit normal has a smaller component along the
 /// feather's normal are left out (they face away: far skin, overhangs).
@@ -156,6 +156,9 @@ pub struct HeightField {
     pub(crate) boxes: Vec<super::steps::ObstacleBoxes>,
     /// The obstacles within reach of one size of the exact pitch sweep.
     pub(crate) sweep_obstacles: Vec<u32>,
+    /// The rasterised obstacles' triangles in the root frame (kept for
+    /// the refills of one feather's smaller sizes).
+    pub(crate) local_obstacles: Vec<[[Vec3; 3]; 2]>,
 }
 
 impl HeightField {
@@ -188,6 +191,7 @@ impl HeightField {
             check_part: Vec::new(),
             boxes: Vec::new(),
             sweep_obstacles: Vec::new(),
+            local_obstacles: Vec::new(),
         };
         f.set_resolution(u, v);
         f
@@ -290,7 +294,13 @@ impl HeightField {
     /// Rasterises an obstacle feather's two world triangles, raised by its
     /// thickness. Returns whether any cell was touched (one collision test).
     pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]; 2], thickness: f32) -> bool {
-        let (a, b) = (to_local3(frame, &triangles[0]), to_local3(frame, &triangles[1]));
+        self.add_local_obstacle(&LocalMap::new(frame).triangles(triangles), thickness)
+    }
+
+    /// [`HeightField::add_obstacle`] with the triangles already in the
+    /// root frame's local coordinates.
+    pub(crate) fn add_local_obstacle(&mut self, local: &[[Vec3; 3]; 2], thickness: f32) -> bool {
+        let [a, b] = *local;
         // Both triangles at once against the footprint first (most
         // candidates within reach miss it).
         let lo = a[0].min(a[1]).min(a[2]).min(b[0]).min(b[1]).min(b[2]);
@@ -318,6 +328,7 @@ impl HeightField {
     pub fn add_body(&mut self, frame: &RootFrame, body: &BodyIndex) {
         let reach = self.shape.length + self.dx;
         let band = SKIN_BAND_PER_LENGTH * self.shape.length;
+        let map = LocalMap::new(frame);
         let mut ids = std::mem::take(&mut self.body_ids);
         let band_box = self.world_bounds(frame, self.body_floor, band);
         body.triangles_in_box(&band_box, &mut ids);
@@ -326,7 +337,7 @@ impl HeightField {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
                 continue;
             }
-            let local = to_local3(frame, &body.corners(t));
+            let local = map.triangle(&body.corners(t));
             rises |= local[0].z.max(local[1].z).max(local[2].z) >= 0.9 * band;
             self.rasterise(Layer::Body, local, 0.0);
         }
@@ -337,7 +348,7 @@ impl HeightField {
                 if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN || body.grid().bounds(t).overlaps(&band_box) {
                     continue;
                 }
-                let local = to_local3(frame, &body.corners(t));
+                let local = map.triangle(&body.corners(t));
                 // Triangles wholly within the band are left to the first search.
                 if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
                     self.rasterise(Layer::Body, local, 0.0);
@@ -372,7 +383,7 @@ impl HeightField {
         let g = [grid(tri[0]), grid(tri[1]), grid(tri[2])];
         let gmin = Vec2::new(min3(g[0].x, g[1].x, g[2].x), min3(g[0].y, g[1].y, g[2].y));
         let gmax = Vec2::new(max3(g[0].x, g[1].x, g[2].x), max3(g[0].y, g[1].y, g[2].y));
-        let (u, v) = (self.u as f32, self.v as f32);
+        let (u, v) = (index_f32(self.u), index_f32(self.v));
         let socket_u = self.socket_x * inv_dx;
         if !(gmax.x >= socket_u && gmin.x <= u && gmax.y >= 0.0 && gmin.y <= v) {
             return false;
@@ -380,7 +391,7 @@ impl HeightField {
         // Columns wholly inside the root socket are skipped; the column
         // holding the socket's end only counts beyond it.
         let socket_col = (floor_i32(socket_u).max(0) as usize).min(self.u - 1);
-        let socket_cut = socket_u - socket_col as f32;
+        let socket_cut = socket_u - index_f32(socket_col);
         let i0 = (floor_i32(gmin.x).max(0) as usize).max(socket_col);
         let i1 = (floor_i32(gmax.x).max(0) as usize).min(self.u - 1);
         let j0 = floor_i32(gmin.y).max(0) as usize;
@@ -399,7 +410,7 @@ impl HeightField {
         // rows of a chunk are computed side by side).
         let mut spans = [(i0, i1); SPAN_ROWS];
         for j in j0..=j1 {
-            let vc = j as f32 + 0.5;
+            let vc = index_f32(j) + 0.5;
             if let Some(p) = &plane
                 && (j - j0) % SPAN_ROWS == 0
             {
@@ -417,13 +428,13 @@ impl HeightField {
             };
             let mut start = lo;
             if lo == socket_col {
-                let (uc, half) = (socket_col as f32 + 0.5 * (1.0 + socket_cut), 0.5 * (1.0 - socket_cut));
+                let (uc, half) = (index_f32(socket_col) + 0.5 * (1.0 + socket_cut), 0.5 * (1.0 - socket_cut));
                 let h = (p.height_at(uc, vc) + p.du.abs() * half + 0.5 * p.dv.abs()).min(z_top) + raise;
                 row[lo] = row[lo].max(h);
                 start = lo + 1;
             }
             if start <= hi {
-                raise_row(&mut row[start..=hi], p.height_at(start as f32 + 0.5, vc) + p.slack, p.du, z_top, raise);
+                raise_row(&mut row[start..=hi], p.height_at(index_f32(start) + 0.5, vc) + p.slack, p.du, z_top, raise);
             }
         }
         touched
@@ -445,10 +456,40 @@ fn min3(a: f32, b: f32, c: f32) -> f32 {
     if m < c { m } else { c }
 }
 
-/// A world triangle in the root frame's local coordinates.
-#[inline]
-fn to_local3(frame: &RootFrame, t: &[Vec3; 3]) -> [Vec3; 3] {
-    [frame.to_local(t[0]), frame.to_local(t[1]), frame.to_local(t[2])]
+/// A root frame's map from world to local coordinates, in SIMD lanes:
+/// the same f32 operations in the same order as [`RootFrame::to_local`]'s
+/// three dot products (`(x + y) + z` per component), so the same values.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LocalMap {
+    /// Columns `(t.x, b.x, n.x)`, `(t.y, b.y, n.y)`, `(t.z, b.z, n.z)` of
+    /// the frame's tangent, binormal and normal.
+    rows: Mat3A,
+    origin: Vec3A,
+}
+
+impl LocalMap {
+    pub(crate) fn new(frame: &RootFrame) -> Self {
+        let (t, b, n) = (frame.tangent, frame.binormal, frame.normal);
+        let rows = Mat3A::from_cols(Vec3A::new(t.x, b.x, n.x), Vec3A::new(t.y, b.y, n.y), Vec3A::new(t.z, b.z, n.z));
+        Self { rows, origin: frame.position.into() }
+    }
+
+    #[inline]
+    fn point(&self, p: Vec3) -> Vec3 {
+        (self.rows * (Vec3A::from(p) - self.origin)).into()
+    }
+
+    /// A world triangle in local coordinates.
+    #[inline]
+    pub(crate) fn triangle(&self, t: &[Vec3; 3]) -> [Vec3; 3] {
+        t.map(|p| self.point(p))
+    }
+
+    /// A feather's two world triangles in local coordinates.
+    #[inline]
+    pub(crate) fn triangles(&self, t: &[[Vec3; 3]; 2]) -> [[Vec3; 3]; 2] {
+        [self.triangle(&t[0]), self.triangle(&t[1])]
+    }
 }
 
 /// Raises each cell to `min(first + k·step, cap) + raise` (k = its
@@ -462,6 +503,13 @@ fn raise_row(cells: &mut [f32], first: f32, step: f32, cap: f32, raise: f32) {
         // An unconditional store of the larger keeps the loop vectorised.
         *cell = if h > *cell { h } else { *cell };
     }
+}
+
+/// A grid index (far below 2^24) as f32: converted through i32, one
+/// instruction where usize takes a branch and several (the same value).
+#[inline(always)]
+fn index_f32(i: usize) -> f32 {
+    i as i32 as f32
 }
 
 /// `⌊x⌋` as an integer, saturating (no libm call on baseline x86-64).
@@ -532,10 +580,10 @@ impl TrianglePlane {
     /// when none does.
     #[inline]
     fn row_spans(&self, j: usize, i0: usize, i1: usize) -> [(usize, usize); SPAN_ROWS] {
-        let vc: [f32; SPAN_ROWS] = std::array::from_fn(|k| (j + k) as f32 + 0.5);
+        let vc: [f32; SPAN_ROWS] = std::array::from_fn(|k| index_f32(j + k) + 0.5);
         // Bounds on the column centre i + 0.5, tightest over the edges,
         // rounded once at the end.
-        let (mut lo, mut hi) = ([i0 as f32; SPAN_ROWS], [i1 as f32; SPAN_ROWS]);
+        let (mut lo, mut hi) = ([index_f32(i0); SPAN_ROWS], [index_f32(i1); SPAN_ROWS]);
         let mut shut = [false; SPAN_ROWS];
         for &[a, b, c, inv_a] in &self.edges {
             // a·(i + 0.5) + rest ≥ 0, with rest = b·vc + c.
@@ -557,7 +605,7 @@ impl TrianglePlane {
         }
         // lo ≥ i0 and hi ≤ i1 (neither is ever NaN); clamped to within one
         // of the other end, they round the same way or stay out of range.
-        let (far_lo, far_hi) = (i1 as f32 + 1.0, i0 as f32 - 1.0);
+        let (far_lo, far_hi) = (index_f32(i1) + 1.0, index_f32(i0) - 1.0);
         // Rounded in a loop of its own, over plain i32 arrays, so that it
         // vectorises.
         let (mut first, mut last) = ([0i32; SPAN_ROWS], [0i32; SPAN_ROWS]);

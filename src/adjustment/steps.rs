@@ -27,7 +27,7 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{GridExtent, JUDGE_FRACTION, ceil_i32, floor_i32};
+use super::height_field::{GridExtent, JUDGE_FRACTION, LocalMap, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::{FeatherPose, FeatherShape};
@@ -113,7 +113,7 @@ pub(crate) fn adjust_feather_boxed(
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
     scratch.set_resolution(params.height_field_u, params.height_field_v);
-    let collision_tests = fill_field(scratch, frame, shape, obstacles, body, params);
+    let collision_tests = fill_field(scratch, frame, shape, obstacles, body, params, false);
     // The height field is conservative but coarse, and blind to what it
     // leaves out (skin facing away, such as a wing hanging over the body;
     // feathers of the opposite skin). So every chosen pose is checked with
@@ -160,7 +160,7 @@ pub(crate) fn adjust_feather_boxed(
         scale = next;
         let small = shape.scaled(scale);
         if scale < REFILL_BELOW {
-            fill_field(scratch, frame, &small, obstacles, body, params);
+            fill_field(scratch, frame, &small, obstacles, body, params, true);
             filled_length = small.length;
         } else {
             scratch.shape = small;
@@ -466,7 +466,9 @@ fn raised_top(triangles: &[[Vec3; 3]; 2], thickness: f32) -> [[Vec3; 3]; 2] {
 }
 
 /// Clears `field` over `shape`'s footprint and rasterises the obstacles and
-/// the body near the root. Returns the obstacles that touched it.
+/// the body near the root. Returns the obstacles that touched it. A
+/// `refill` (a smaller size of the same feather, at the same frame)
+/// reuses the obstacles' local triangles of the first fill.
 fn fill_field(
     field: &mut HeightField,
     frame: &RootFrame,
@@ -474,14 +476,23 @@ fn fill_field(
     obstacles: &[ObstacleFeather],
     body: &BodyIndex,
     params: &AdjustParams,
+    refill: bool,
 ) -> u32 {
     field.reset(shape, params.min_pitch);
+    let near = || obstacles.iter().filter(|o| !o.far_side);
+    let mut local = std::mem::take(&mut field.local_obstacles);
+    if !refill {
+        let map = LocalMap::new(frame);
+        local.clear();
+        local.extend(near().map(|o| map.triangles(&o.triangles)));
+    }
     let mut collision_tests = 0u32;
-    for o in obstacles.iter().filter(|o| !o.far_side) {
-        if field.add_obstacle(frame, &o.triangles, o.thickness) {
+    for (l, o) in local.iter().zip(near()) {
+        if field.add_local_obstacle(l, o.thickness) {
             collision_tests += 1;
         }
     }
+    field.local_obstacles = local;
     field.add_body(frame, body);
     collision_tests
 }

@@ -262,14 +262,18 @@ fn penetrates_body_posed(
     }
     let prepared = &prepared[..part.len().min(4)];
     // Every part lies in the feather's plane: a body triangle wholly on
-    // one side of it crosses none of them.
+    // one side of it crosses none of them. Nor does a part lying wholly on
+    // one side of the body triangle (along its face normal).
     let crossing = |t: u32| {
         let corners = body.corners(t);
         if plane.apart(&corners) {
             return false;
         }
-        let tri = Prepared::of(&corners);
-        prepared.iter().any(|p| prepared_intersect(p, &tri))
+        let axis = SeparatingAxis::new(body.normal(t), &corners, plane.margin);
+        let mut tri = None;
+        prepared.iter().zip(part.iter()).any(|(p, pt)| {
+            !axis.separates(pt) && prepared_intersect(p, tri.get_or_insert_with(|| Prepared::of(&corners)))
+        })
     };
     // The box query returns exactly the triangles whose boxes overlap
     // `bounds` (none when `bounds` is not a proper box).
@@ -410,6 +414,39 @@ impl FlatPlane {
         let d = t.map(|p| self.normal.dot(p) - self.offset);
         (d[0] > self.margin && d[1] > self.margin && d[2] > self.margin)
             || (d[0] < -self.margin && d[1] < -self.margin && d[2] < -self.margin)
+    }
+}
+
+/// A direction along which a triangle spans `[lo, hi]`: another triangle
+/// wholly beyond the span, by more than a margin, cannot meet it, and the
+/// exact test, which treats contact within its tolerance as none, finds
+/// no intersection either. Any direction separates soundly (it need not
+/// be an exact normal); the margin (at least the posed feather's
+/// [`FlatPlane`] margin, and 1e-5 of the span's coordinates) lies far
+/// above the rounding of the f32 projections.
+#[derive(Clone, Copy, Debug)]
+struct SeparatingAxis {
+    axis: Vec3,
+    lo: f32,
+    hi: f32,
+}
+
+impl SeparatingAxis {
+    /// The span of `t` along `axis` (a face normal; zero never separates),
+    /// widened by `margin` and the rounding allowance.
+    #[inline]
+    fn new(axis: Vec3, t: &[Vec3; 3], margin: f32) -> Self {
+        let d = t.map(|p| axis.dot(p));
+        let size = t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element();
+        let m = margin + 1e-5 * size;
+        Self { axis, lo: d[0].min(d[1]).min(d[2]) - m, hi: d[0].max(d[1]).max(d[2]) + m }
+    }
+
+    /// Whether triangle `t` lies wholly beyond the span, on one side.
+    #[inline]
+    fn separates(&self, t: &[Vec3; 3]) -> bool {
+        let d = t.map(|p| self.axis.dot(p));
+        (d[0] > self.hi && d[1] > self.hi && d[2] > self.hi) || (d[0] < self.lo && d[1] < self.lo && d[2] < self.lo)
     }
 }
 
