@@ -624,6 +624,9 @@ struct Posed<'a> {
 
 /// Adjusts the feathers of one level in parallel chunks; each chunk has its
 /// own worker scratch. Results land in `outcomes` by position.
+/// Levels with fewer feathers than this are visited on the calling thread.
+const PARALLEL_LEVEL_MIN: usize = 4;
+
 fn run_level(
     inputs: &Inputs<'_>,
     items: &[u32],
@@ -633,6 +636,15 @@ fn run_level(
     outcomes: &mut [Visit],
     workers: &mut [Worker],
 ) {
+    // Waking another thread costs about as much as checking a feather, and
+    // most levels hold one or two: those run on this thread. Which worker
+    // visits a feather never changes what it finds.
+    if items.len() < PARALLEL_LEVEL_MIN || workers.len() == 1 {
+        for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+            *out = adjust_one(inputs, i as usize, poses, posed, marks, &mut workers[0]);
+        }
+        return;
+    }
     let chunk = items.len().div_ceil(workers.len()).max(1);
     items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
         |((items, outcomes), worker)| {
