@@ -49,9 +49,14 @@ fn benches(c: &mut Criterion) {
     }
     group.finish();
 
-    // Side by side: each system from the clip's first frame, then every
-    // frame stepped by all of them in turn (frame 0, the jump from the
-    // rest pose, is left out of the means).
+    // Side by side: fresh systems (so that the counts printed do not
+    // depend on how many iterations criterion ran), each from the clip's
+    // first frame, then every frame stepped by all of them in turn (frame
+    // 0, the jump from the rest pose, is left out of the means).
+    let mut systems: Vec<System> = runs
+        .iter()
+        .map(|(_, cfg)| System::new(cfg, &MeshInput::new(&rest.positions, &rest.indices)).expect("create"))
+        .collect();
     let mut totals = vec![(0.0f64, 0usize, 0usize); runs.len()];
     for sys in &mut systems {
         sys.step(&frames[0]).expect("step");
