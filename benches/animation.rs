@@ -53,6 +53,7 @@ fn benches(c: &mut Criterion) {
     // depend on how many iterations criterion ran), each from the clip's
     // first frame, then every frame stepped by all of them in turn (frame
     // 0, the jump from the rest pose, is left out of the means).
+    drop(systems);
     let mut systems: Vec<System> = runs
         .iter()
         .map(|(_, cfg)| System::new(cfg, &MeshInput::new(&rest.positions, &rest.indices)).expect("create"))

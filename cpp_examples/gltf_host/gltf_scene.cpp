@@ -417,10 +417,10 @@ std::vector<double> GltfScene::morphed_positions(const std::vector<double>& weig
     return p;
 }
 
-// Linear blend skinning; the skinned node's own transform is ignored (glTF 2.0, 3.7.3.3).
 // The maps that carry the mesh's own space to the scene: one per joint for
 // a skinned mesh (the joint's global transform times its inverse bind
-// matrix), else the instancing node's global transform.
+// matrix; the skinned node's own transform is ignored, glTF 2.0, 3.7.3.3),
+// else the instancing node's global transform.
 std::vector<Mat4> GltfScene::vertex_maps(const std::vector<Mat4>& global) const {
     if (!skinned()) return {instance_node_ >= 0 ? global[static_cast<size_t>(instance_node_)] : Mat4{}};
     std::vector<Mat4> joint(joints_.size());
@@ -429,7 +429,7 @@ std::vector<Mat4> GltfScene::vertex_maps(const std::vector<Mat4>& global) const 
 }
 
 // Vertex v at mesh-space position p, carried by `maps` (see vertex_maps):
-// skinned by its influences, or placed by the node.
+// linear blend skinning by its influences, or placed by the node.
 Vec3 GltfScene::posed_vertex(size_t v, const Vec3& p, const std::vector<Mat4>& maps) const {
     if (!skinned()) return transform_point(maps[0], p);
     Vec3 out = influence_begin_[v] == influence_begin_[v + 1] ? p : Vec3{};  // no influence: left in place

@@ -622,11 +622,12 @@ struct Posed<'a> {
     boxes: &'a [ObstacleBoxes],
 }
 
-/// Adjusts the feathers of one level in parallel chunks; each chunk has its
-/// own worker scratch. Results land in `outcomes` by position.
 /// Levels with fewer feathers than this are visited on the calling thread.
 const PARALLEL_LEVEL_MIN: usize = 4;
 
+/// Adjusts the feathers of one level, in parallel chunks when it is large
+/// enough; each chunk has its own worker scratch. Results land in
+/// `outcomes` by position.
 fn run_level(
     inputs: &Inputs<'_>,
     items: &[u32],
@@ -639,20 +640,21 @@ fn run_level(
     // Waking another thread costs about as much as checking a feather, and
     // most levels hold one or two: those run on this thread. Which worker
     // visits a feather never changes what it finds.
-    if items.len() < PARALLEL_LEVEL_MIN || workers.len() == 1 {
+    let visit = |items: &[u32], outcomes: &mut [Visit], worker: &mut Worker| {
         for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
-            *out = adjust_one(inputs, i as usize, poses, posed, marks, &mut workers[0]);
+            *out = adjust_one(inputs, i as usize, poses, posed, marks, worker);
         }
+    };
+    if items.len() < PARALLEL_LEVEL_MIN || workers.len() == 1 {
+        visit(items, outcomes, &mut workers[0]);
         return;
     }
     let chunk = items.len().div_ceil(workers.len()).max(1);
-    items.par_chunks(chunk).zip(outcomes.par_chunks_mut(chunk)).zip(workers.par_iter_mut()).for_each(
-        |((items, outcomes), worker)| {
-            for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
-                *out = adjust_one(inputs, i as usize, poses, posed, marks, worker);
-            }
-        },
-    );
+    items
+        .par_chunks(chunk)
+        .zip(outcomes.par_chunks_mut(chunk))
+        .zip(workers.par_iter_mut())
+        .for_each(|((items, outcomes), worker)| visit(items, outcomes, worker));
 }
 
 /// Adjusts feather `i` against its earlier candidates, unless propagation
