@@ -61,11 +61,9 @@ pub struct Neighbourhoods {
     leaf_starts: Vec<u32>,
     points: Vec<(glam::Vec3, f32)>,
     cells: Vec<Cell>,
-    pair_scratch: Vec<(u32, u32, f32)>,
-    scratch_d2: Vec<f32>,
-    /// `|r_i − r_j|²` of every obstacle entry, beside `obstacle_indices`
-    /// (filled by [`rebuild`](Self::rebuild) only).
-    obstacle_d2: Vec<f32>,
+    pair_scratch: Vec<(u32, u32)>,
+    /// Root positions by index, for the distances of the k nearest.
+    positions: Vec<glam::Vec3>,
 }
 
 impl Neighbourhoods {
@@ -134,19 +132,25 @@ impl Neighbourhoods {
     /// close its candidates hold its k nearest roots; only the other roots
     /// (none on a closed coat) query the tree. Both ways rank candidates by
     /// the same `(|r_j − r_i|², j)`, so the rows are those of the tree alone.
-    /// The distances of the candidates are those kept by the obstacle pass.
+    /// The candidates' distances are computed again from the positions,
+    /// bitwise as the obstacle pass compared them.
     fn rebuild_nearest(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
         let k = params.k;
         let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
         self.knn_offsets.clear();
         self.knn_indices.clear();
         self.knn_offsets.push(0);
+        self.positions.clear();
+        self.positions.extend(frames.iter().map(|f| f.position));
         for (i, frame) in frames.iter().enumerate() {
             self.best.clear();
             if k > 0 {
                 let entries = self.obstacle_offsets[i] as usize..self.obstacle_offsets[i + 1] as usize;
-                let distances = &self.obstacle_d2[entries.clone()];
-                for (&j, &d2) in self.obstacle_indices[entries].iter().zip(distances) {
+                let p = frame.position;
+                for &j in &self.obstacle_indices[entries] {
+                    // Bitwise the distance the obstacle pass compared
+                    // (negating a difference does not change its square).
+                    let d2 = (self.positions[j as usize] - p).length_squared();
                     if ranks_among_best(&self.best, k, d2, j)
                         && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
                     {
@@ -220,7 +224,6 @@ impl Neighbourhoods {
         let n = frames.len();
         self.obstacle_offsets.clear();
         self.obstacle_indices.clear();
-        self.obstacle_d2.clear();
         if reach.is_empty() {
             self.obstacle_offsets.resize(n + 1, 0);
             return;
@@ -255,7 +258,7 @@ impl Neighbourhoods {
                         let limit = r + s;
                         let d2 = (q - p).length_squared();
                         if d2 <= limit * limit {
-                            pairs.push((ids[k], ids[from + l], d2));
+                            pairs.push((ids[k], ids[from + l]));
                         }
                     }
                 }
@@ -264,7 +267,7 @@ impl Neighbourhoods {
         // Unsorted symmetric rows, then their transpose.
         let offsets = &mut self.obstacle_offsets;
         offsets.resize(n + 1, 0);
-        for &(i, j, _) in pairs.iter() {
+        for &(i, j) in pairs.iter() {
             offsets[i as usize + 1] += 1;
             offsets[j as usize + 1] += 1;
         }
@@ -275,27 +278,21 @@ impl Neighbourhoods {
         self.fill_cursor.extend_from_slice(&offsets[..n]);
         self.scratch_indices.clear();
         self.scratch_indices.resize(2 * pairs.len(), 0);
-        self.scratch_d2.clear();
-        self.scratch_d2.resize(2 * pairs.len(), 0.0);
-        for &(i, j, d2) in pairs.iter() {
+        for &(i, j) in pairs.iter() {
             for (row, other) in [(i, j), (j, i)] {
                 let slot = &mut self.fill_cursor[row as usize];
                 self.scratch_indices[*slot as usize] = other;
-                self.scratch_d2[*slot as usize] = d2;
                 *slot += 1;
             }
         }
         self.fill_cursor.clear();
         self.fill_cursor.extend_from_slice(&offsets[..n]);
         self.obstacle_indices.resize(self.scratch_indices.len(), 0);
-        self.obstacle_d2.clear();
-        self.obstacle_d2.resize(self.scratch_indices.len(), 0.0);
         for i in 0..n as u32 {
             let entries = offsets[i as usize] as usize..offsets[i as usize + 1] as usize;
-            for (&j, &d2) in self.scratch_indices[entries.clone()].iter().zip(&self.scratch_d2[entries]) {
+            for &j in &self.scratch_indices[entries] {
                 let slot = &mut self.fill_cursor[j as usize];
                 self.obstacle_indices[*slot as usize] = i;
-                self.obstacle_d2[*slot as usize] = d2;
                 *slot += 1;
             }
         }
