@@ -579,6 +579,22 @@ typedef struct PlumageFrameStats {
    * their pose (incremental mode with `drift_tolerance` above `theta_s`).
    */
   uint64_t verified;
+  /**
+   * The part of `reorder_seconds` spent finding neighbourhoods and
+   * obstacle candidates at the current pose: every create, evaluate and
+   * rebuild step, incremental steps with `recompute_neighbourhoods`,
+   * never a legacy step (appended; a shorter, older struct is filled up
+   * to its `struct_size`).
+   */
+  double neighbourhood_seconds;
+  /**
+   * Levels the adjustment ran through: the longest chain, among the
+   * feathers the call may visit, of feathers each reading the one before
+   * as an obstacle, plus one per feather of a step's rare second pass.
+   * The feathers of a level run in parallel; levels close to the number
+   * of feathers visited mean the call ran nearly one at a time.
+   */
+  uint64_t levels;
 } PlumageFrameStats;
 
 /**

@@ -190,6 +190,7 @@ impl Coat {
         progress.check(Phase::Ordering, 0.0)?;
         let order_start = Instant::now();
         self.neighbourhoods.rebuild(&self.frames, &dressing.reach, &dressing.neighbour_params);
+        let neighbourhood_seconds = order_start.elapsed().as_secs_f64();
         progress.check(Phase::Ordering, 0.5)?;
         self.poses.clear();
         self.poses.resize(dressing.len(), FeatherPose::default());
@@ -248,6 +249,8 @@ impl Coat {
             reorder_seconds: self.ordering_report.seconds,
             adjust_seconds: stats.seconds,
             step_seconds: start.elapsed().as_secs_f64(),
+            neighbourhood_seconds,
+            levels: stats.levels,
         };
         Ok(())
     }
@@ -330,12 +333,15 @@ impl Coat {
             reorder_seconds,
             adjust_seconds,
             step_seconds,
+            neighbourhood_seconds,
+            levels,
         } = self.frame_report;
         w.u64(frame_index);
         [adjusted, deformed, seeds, verified].iter().for_each(|&c| w.u64(c as u64));
         w.u64(collision_tests);
         [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
-        [reorder_seconds, adjust_seconds, step_seconds].iter().for_each(|&s| w.f64(s));
+        [reorder_seconds, adjust_seconds, step_seconds, neighbourhood_seconds].iter().for_each(|&s| w.f64(s));
+        w.u64(levels as u64);
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
         self.staleness.write_state(w);
@@ -397,6 +403,8 @@ impl Coat {
             reorder_seconds: r.f64()?,
             adjust_seconds: r.f64()?,
             step_seconds: r.f64()?,
+            neighbourhood_seconds: r.f64()?,
+            levels: count(r)?,
         };
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
         let order = PriorityOrder::read_state(r, n)?;

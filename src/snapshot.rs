@@ -8,9 +8,10 @@ use crate::rng::mix64;
 
 const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
 /// Version of the payload layout; bump on any change. 4: the staleness
-/// keeps each feather's recorded placements (net motion); blobs of 3 and
-/// earlier are refused.
-pub(crate) const FORMAT_VERSION: u32 = 4;
+/// keeps each feather's recorded placements (net motion). 5: the frame
+/// figures hold the neighbourhood time and the level count. Blobs of
+/// another version are refused.
+pub(crate) const FORMAT_VERSION: u32 = 5;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 
@@ -211,10 +212,12 @@ mod tests {
     #[test]
     fn an_older_format_is_refused_by_name() {
         let mut blob = sample();
-        blob[8..12].copy_from_slice(&3u32.to_le_bytes());
+        let older = FORMAT_VERSION - 1;
+        blob[8..12].copy_from_slice(&older.to_le_bytes());
         let err = Reader::open(&blob, 42).err().unwrap();
         assert_eq!(err.kind(), ErrorKind::InvalidState);
-        assert!(err.to_string().contains("state format 3 is not the supported 4"), "{err}");
+        let expected = format!("state format {older} is not the supported {FORMAT_VERSION}");
+        assert!(err.to_string().contains(&expected), "{err}");
     }
 
     #[test]

@@ -72,6 +72,18 @@ pub struct FrameReport {
     pub adjust_seconds: f64,
     /// Seconds for the whole call.
     pub step_seconds: f64,
+    /// The part of `reorder_seconds` spent finding the neighbourhoods and
+    /// obstacle candidates at the current pose: every create, evaluate and
+    /// rebuild step, incremental steps with
+    /// `Config::recompute_neighbourhoods`, never a legacy step.
+    pub neighbourhood_seconds: f64,
+    /// Levels the adjustment ran through (DESIGN.md §4): the longest chain,
+    /// among the feathers the call may visit, of feathers each reading the
+    /// one before as an obstacle, plus one per feather of a step's second
+    /// pass (which runs one feather after another). A level's feathers run
+    /// in parallel; levels close to the number of feathers visited mean the
+    /// call ran nearly one feather at a time.
+    pub levels: usize,
 }
 
 impl FrameReport {

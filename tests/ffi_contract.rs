@@ -307,6 +307,10 @@ fn frame_stats_report_r_k_and_the_seeds() {
     unsafe { plumage_system_feather_count(sys, &mut feathers) };
     let created = stats(sys);
     assert_eq!((created.deformed, created.seeds, created.adjusted), (0, feathers as u64, feathers as u64));
+    // Create finds the neighbourhoods (part of its ordering time) and runs
+    // the adjustment by levels: at least one, at most one per feather.
+    assert!(created.neighbourhood_seconds > 0.0 && created.neighbourhood_seconds <= created.reorder_seconds);
+    assert!((1..=created.adjusted).contains(&created.levels), "{} levels", created.levels);
     // Fold the strip x < 2 up about the line x = 2.
     let bent: Vec<f32> = pos
         .chunks(3)
@@ -321,5 +325,15 @@ fn frame_stats_report_r_k_and_the_seeds() {
     assert!(s.verified > 0, "feathers near the fold are checked exactly");
     assert!((s.adjusted + s.verified) as usize <= feathers, "each feather is adjusted or checked at most once");
     assert!((s.adjusted as usize) < feathers, "a local fold does not readjust everything");
+    assert!(s.neighbourhood_seconds > 0.0 && s.neighbourhood_seconds <= s.reorder_seconds);
+    assert!((1..=feathers as u64).contains(&s.levels), "{} levels", s.levels);
+    unsafe { plumage_system_destroy(sys) };
+    // A legacy step keeps the neighbourhoods of the first frame.
+    let cfg = PlumageConfig { mode: PLUMAGE_MODE_LEGACY, ..cfg };
+    let mut sys = null_mut();
+    assert_eq!(unsafe { plumage_system_create(&cfg, &d, &mut sys) }, PLUMAGE_STATUS_OK, "{}", thread_error());
+    assert_eq!(unsafe { plumage_system_step(sys, bent.as_ptr(), pos.len() / 3) }, PLUMAGE_STATUS_OK);
+    let s = stats(sys);
+    assert!(s.adjusted > 0 && s.neighbourhood_seconds == 0.0, "{} adjusted, {} s", s.adjusted, s.neighbourhood_seconds);
     unsafe { plumage_system_destroy(sys) };
 }

@@ -89,8 +89,13 @@ fn observe(sys: &System) -> Observed {
         [f.order_index, f.triangle, f.id as u32, (f.id >> 32) as u32].into_iter().for_each(&mut put);
     }
     sys.feather_triangles().iter().flatten().flatten().for_each(|x| put(x.to_bits()));
-    let frame =
-        FrameReport { reorder_seconds: 0.0, adjust_seconds: 0.0, step_seconds: 0.0, ..sys.frame_report().unwrap() };
+    let frame = FrameReport {
+        reorder_seconds: 0.0,
+        adjust_seconds: 0.0,
+        step_seconds: 0.0,
+        neighbourhood_seconds: 0.0,
+        ..sys.frame_report().unwrap()
+    };
     let ordering = OrderingReport { seconds: 0.0, ..sys.ordering_report().unwrap() };
     Observed { bytes, readjusted: sys.readjusted().to_vec(), frame, ordering, frames_stepped: sys.frames_stepped() }
 }

@@ -107,8 +107,11 @@ pub fn step_coat(
     remember(coat, step);
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
+    let mut neighbourhood_seconds = 0.0;
     if incremental && dressing.recompute_neighbourhoods {
+        let neighbourhood_start = Instant::now();
         coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
+        neighbourhood_seconds = neighbourhood_start.elapsed().as_secs_f64();
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices);
@@ -140,7 +143,7 @@ pub fn step_coat(
     );
 
     // 3. Reordering (incremental only: the legacy order is fixed).
-    let mut report = FrameReport { frame_index: coat.frame_index + 1, ..FrameReport::default() };
+    let mut report = FrameReport { frame_index: coat.frame_index + 1, neighbourhood_seconds, ..FrameReport::default() };
     if incremental {
         let priorities = Priorities::improved(&coat.frames, dressing.gamma, dressing.lambda);
         let pairs = dressing.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
@@ -217,6 +220,8 @@ pub fn step_coat(
             stats.adjusted = step.adjusted.iter().filter(|a| **a).count();
             stats.verified = step.verified.iter().zip(&step.adjusted).filter(|(v, a)| **v && !**a).count();
             stats.collision_tests += more.collision_tests;
+            // The second pass visits its feathers one after another.
+            stats.levels += more.adjusted + more.verified;
             // A feather adjusted in both passes may be counted clamped twice.
             stats.clamped = (stats.clamped + more.clamped).min(stats.adjusted);
             stats.seconds += more.seconds;
@@ -229,6 +234,7 @@ pub fn step_coat(
     report.collision_tests = stats.collision_tests;
     report.clamped = stats.clamped;
     report.adjust_seconds = stats.seconds;
+    report.levels = stats.levels;
     report.step_seconds = start.elapsed().as_secs_f64();
     coat.frame_index += 1;
     coat.frame_report = report;

@@ -349,6 +349,8 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
             deformed: r.deformed as u64,
             seeds: r.seeds as u64,
             verified: r.verified as u64,
+            neighbourhood_seconds: r.neighbourhood_seconds,
+            levels: r.levels as u64,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
         unsafe { write_versioned(out, std::mem::size_of::<PlumageFrameStats>(), value, "PlumageFrameStats") }

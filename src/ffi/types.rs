@@ -512,6 +512,18 @@ pub struct PlumageFrameStats {
     /// Feathers whose surroundings moved that were checked exactly and kept
     /// their pose (incremental mode with `drift_tolerance` above `theta_s`).
     pub verified: u64,
+    /// The part of `reorder_seconds` spent finding neighbourhoods and
+    /// obstacle candidates at the current pose: every create, evaluate and
+    /// rebuild step, incremental steps with `recompute_neighbourhoods`,
+    /// never a legacy step (appended; a shorter, older struct is filled up
+    /// to its `struct_size`).
+    pub neighbourhood_seconds: f64,
+    /// Levels the adjustment ran through: the longest chain, among the
+    /// feathers the call may visit, of feathers each reading the one before
+    /// as an obstacle, plus one per feather of a step's rare second pass.
+    /// The feathers of a level run in parallel; levels close to the number
+    /// of feathers visited mean the call ran nearly one at a time.
+    pub levels: u64,
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
@@ -549,6 +561,6 @@ const _: () = {
     assert!(size_of::<PlumageFeather>() == 8 + 4 + 4 + 4 * 3 * 4 + 4 * 5 + 4);
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 15);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 17);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 6);
 };
