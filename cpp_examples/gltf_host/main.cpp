@@ -67,19 +67,27 @@ PlumageConfig make_config(const Options& opt) {
     return cfg;
 }
 
-// Clip times of the frames to step: start + k / fps, the whole clip by default.
+// Clip times of the frames to step: the clip's start + --start + k / fps,
+// up to the end of the clip by default.
 std::vector<double> frame_times(const Options& opt, const std::optional<ClipInfo>& clip) {
+    if (clip && opt.start > clip->duration + 1e-9) {
+        char message[256];
+        std::snprintf(message, sizeof message, "--start %g is past the end of clip \"%s\" (%g s long)", opt.start, clip->name.c_str(), clip->duration);
+        throw UsageError(message);
+    }
     size_t n = 0;
     if (opt.frames) n = static_cast<size_t>(*opt.frames);
-    else if (clip) n = static_cast<size_t>(std::floor(clip->duration * opt.fps + 1e-6)) + 1;
+    else if (clip) n = static_cast<size_t>(std::floor((clip->duration - opt.start) * opt.fps + 1e-6)) + 1;
     std::vector<double> times(n);
-    for (size_t k = 0; k < n; ++k) times[k] = (clip ? clip->start : 0.0) + static_cast<double>(k) / opt.fps;
+    const double first = (clip ? clip->start : 0.0) + opt.start;
+    for (size_t k = 0; k < n; ++k) times[k] = first + static_cast<double>(k) / opt.fps;
     return times;
 }
 
 nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, const std::optional<ClipInfo>& clip, size_t frames) {
     nlohmann::ordered_json j = config_to_json(cfg);
     j["fps"] = opt.fps;
+    j["start"] = opt.start;
     j["frames"] = frames;
     j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
                           : nlohmann::ordered_json(nullptr);

@@ -98,7 +98,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 }
 
 bool takes_value(const std::string& option) {
-    static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--frames",  "--feathers", "--spacing", "--sampler",
+    static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
                                            "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
@@ -139,7 +139,8 @@ std::string usage_text() {
            "  --mesh NAME|I        mesh to dress (default: the largest skinned or morphed mesh)\n"
            "  --animation NAME|I   clip to play (default 0)\n"
            "  --fps F              sampling rate of the clip (default 30)\n"
-           "  --frames N           frames to step (default: the whole clip); 0 = rest pose only\n"
+           "  --start S            seconds into the clip of the first frame (default 0): a busy window of a long clip\n"
+           "  --frames N           frames to step (default: the rest of the clip); 0 = rest pose only\n"
            "  --feathers N         target feather count (or --spacing D: root spacing in model units)\n"
            "  --sampler guided|random   --theta DEG   --seed S   --flow X,Y,Z\n"
            "  --flow-source X,Y,Z  feathers flow away from this point along the surface (e.g. the head)\n"
@@ -196,6 +197,9 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--fps") {
             o.fps = parse_real(arg, value);
             if (!(o.fps > 0) || o.fps > 1e4) bad(arg, value, "a rate above 0 and at most 10000");
+        } else if (arg == "--start") {
+            o.start = parse_real(arg, value);
+            if (!(o.start >= 0) || o.start > 1e7) bad(arg, value, "seconds from 0 to 10000000");
         } else if (arg == "--frames") o.frames = parse_unsigned(arg, value, 10000000);
         else if (arg == "--feathers") o.feathers = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--spacing") o.spacing = parse_float(arg, value);

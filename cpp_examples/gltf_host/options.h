@@ -25,7 +25,8 @@ struct Options {
     std::string mesh;
     std::string animation;
     double fps = 30;
-    std::optional<uint64_t> frames;  // default: the whole clip
+    double start = 0;                // seconds into the clip of the first frame
+    std::optional<uint64_t> frames;  // default: the rest of the clip
     // Library settings; unset ones keep plumage_config_init's defaults.
     std::optional<uint32_t> feathers;
     std::optional<float> spacing;

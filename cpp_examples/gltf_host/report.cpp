@@ -30,6 +30,14 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, buried_probes)) j["buried_probes"] = v.buried_probes;
 }
 
+// The adjustment's figures, shared by `static` and each frame.
+void put_adjustment(json& j, const PlumageFrameStats& s) {
+    if (PLUMAGE_FILLED(s, collision_tests_per_feather)) put(j, "collision_tests_per_feather", s.collision_tests_per_feather);
+    if (PLUMAGE_FILLED(s, clamped)) j["clamped"] = s.clamped;
+    if (PLUMAGE_FILLED(s, levels)) j["levels"] = s.levels;
+    if (PLUMAGE_FILLED(s, neighbourhood_seconds)) put(j, "neighbourhood_seconds", s.neighbourhood_seconds);
+}
+
 // The memory figures, shared by `memory` and each frame.
 void put_memory(json& j, const MemoryUsage& m) {
     if (m.rss_kib) j["rss_kib"] = *m.rss_kib;
@@ -125,7 +133,7 @@ void Report::set_static(const std::optional<PlumageFrameStats>& s, const std::op
     static_ = json::object();
     if (s) {
         if (PLUMAGE_FILLED(*s, adjust_seconds)) put(static_, "seconds", s->adjust_seconds);
-        if (PLUMAGE_FILLED(*s, collision_tests_per_feather)) put(static_, "collision_tests_per_feather", s->collision_tests_per_feather);
+        put_adjustment(static_, *s);
     }
     if (v) put_validation(static_, *v);
 }
@@ -137,10 +145,17 @@ void Report::add_frame(size_t index, double time, double step_seconds, const std
     if (s) {
         if (PLUMAGE_FILLED(*s, adjusted)) f["adjusted"] = s->adjusted;
         if (PLUMAGE_FILLED(*s, verified)) f["verified"] = s->verified;
-        if (PLUMAGE_FILLED(*s, collision_tests_per_feather)) put(f, "collision_tests_per_feather", s->collision_tests_per_feather);
+        if (PLUMAGE_FILLED(*s, deformed)) f["deformed"] = s->deformed;
+        if (PLUMAGE_FILLED(*s, seeds)) f["seeds"] = s->seeds;
+        put_adjustment(f, *s);
         if (PLUMAGE_FILLED(*s, priority_changes)) f["priority_changes"] = s->priority_changes;
+        if (PLUMAGE_FILLED(*s, priority_change_percent)) put(f, "priority_change_percent", s->priority_change_percent);
+        if (PLUMAGE_FILLED(*s, reversals)) f["reversals"] = s->reversals;
+        if (PLUMAGE_FILLED(*s, reversals_refused)) f["reversals_refused"] = s->reversals_refused;
+        if (PLUMAGE_FILLED(*s, cycles_broken)) f["cycles_broken"] = s->cycles_broken;
         if (PLUMAGE_FILLED(*s, reorder_seconds)) put(f, "reorder_seconds", s->reorder_seconds);
         if (PLUMAGE_FILLED(*s, adjust_seconds)) put(f, "adjust_seconds", s->adjust_seconds);
+        if (PLUMAGE_FILLED(*s, step_seconds)) put(f, "library_step_seconds", s->step_seconds);
     }
     put(f, "step_seconds", step_seconds);
     if (v) put_validation(f, *v);
@@ -165,6 +180,9 @@ json Report::summary() const {
     add("mean_adjusted", "adjusted", 0);
     add("mean_verified", "verified", 0);
     add("mean_step_seconds", "step_seconds", 0);
+    add("mean_library_step_seconds", "library_step_seconds", 0);
+    add("mean_neighbourhood_seconds", "neighbourhood_seconds", 0);
+    add("mean_levels", "levels", 0);
     add("max_intersecting_pairs", "intersecting_pairs", 1);
     add("max_body_penetrations", "body_penetrations", 1);
     add("min_coverage", "coverage", -1);

@@ -240,6 +240,36 @@ int settings() {
     return 0;
 }
 
+// The library's per-call figures reach the report, and they agree with
+// each other: its own step time within the host's, the neighbourhood time
+// within the reordering time, the seeds among the adjusted feathers, and
+// at least one adjustment level when feathers were visited, at most one
+// per feather.
+int frame_figures() {
+    const json r = dress("figures", {"--frames", "3", "--validate", "none"}, 3);
+    const json& st = r["static"];
+    const uint64_t feathers = r.value("feathers", uint64_t{0});
+    CHECK_MSG(st.value("levels", uint64_t{0}) >= 1 && st.value("levels", uint64_t{0}) <= feathers, st.dump());
+    CHECK(st.contains("clamped") && st.value("neighbourhood_seconds", -1.0) > 0);
+    for (const json& f : r["frames"]) {
+        for (const char* key : {"deformed", "seeds", "levels", "clamped", "reversals", "reversals_refused", "cycles_broken", "priority_change_percent",
+                                "neighbourhood_seconds", "library_step_seconds"}) {
+            CHECK_MSG(f.contains(key) && f[key].is_number(), key);
+        }
+        const uint64_t adjusted = f.value("adjusted", uint64_t{0}), verified = f.value("verified", uint64_t{0}), levels = f.value("levels", uint64_t{0});
+        CHECK_MSG(f.value("seeds", uint64_t{0}) <= adjusted, f.dump());
+        CHECK_MSG(levels <= feathers && (adjusted + verified == 0 || levels >= 1), f.dump());
+        CHECK_MSG(f.value("neighbourhood_seconds", 1.0) <= f.value("reorder_seconds", 0.0), f.dump());
+        CHECK_MSG(f.value("library_step_seconds", 1.0) <= f.value("step_seconds", 0.0), f.dump());
+    }
+    const json& s = r["summary"];
+    CHECK(s.value("mean_library_step_seconds", 1.0) <= s.value("mean_step_seconds", 0.0) && s.contains("mean_levels"));
+    // A legacy step keeps the neighbourhoods of the first frame.
+    const json legacy = dress("figures_legacy", {"--frames", "2", "--validate", "none", "--mode", "legacy"}, 2);
+    for (const json& f : legacy["frames"]) CHECK_MSG(f.value("neighbourhood_seconds", 1.0) == 0.0, f.dump());
+    return 0;
+}
+
 int rest_only() {
     const json r = dress("rest", {"--frames", "0"}, 0);
     CHECK(r["config"].value("frames", 99) == 0);
@@ -275,6 +305,21 @@ GltfFixture cube() {
                          {"samplers", {{{"input", in}, {"output", out}}}},
                          {"channels", {{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}}}});
     return f;
+}
+
+// --start moves the window of frames into the clip; the default frame
+// count runs to the end of the clip from there.
+int start_window() {
+    cube().write(path("cube.gltf"), GltfFormat::External);
+    const json r = dress("window", {path("cube.gltf"), "--fps", "4", "--start", "0.5"}, 3);  // 0.5, 0.75 and 1 s of the 1 s clip
+    CHECK(r["config"].value("start", 0.0) == 0.5);
+    for (size_t k = 0; k < r["frames"].size(); ++k) CHECK(std::fabs(r["frames"][k].value("time", -1.0) - (0.5 + 0.25 * static_cast<double>(k))) < 1e-9);
+    const json two = dress("window_two", {path("cube.gltf"), "--fps", "4", "--start", "0.25", "--frames", "2"}, 2);
+    CHECK(std::fabs(two["frames"][1].value("time", -1.0) - 0.5) < 1e-9);
+    EXPECT_REFUSAL(run_host({path("cube.gltf"), "--start", "2"}), 2, "past the end of clip");
+    EXPECT_REFUSAL(run_host({"--start", "-1"}), 2, "--start");
+    EXPECT_REFUSAL(run_host({"--start", "nan"}), 2, "--start");
+    return 0;
 }
 
 int gltf_input() {
@@ -518,6 +563,8 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"fox", [] { return model("Fox.glb", "Mesh", 1728); }},
     {"bird", [] { return model("bird.glb", "Plane", 338); }},
     {"gltf_input", gltf_input},
+    {"start_window", start_window},
+    {"frame_figures", frame_figures},
     {"vertex_maps", vertex_maps},
     {"flow_map", flow_map},
     {"truncated", truncated},
