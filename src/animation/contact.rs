@@ -158,14 +158,19 @@ pub struct Contacts {
 
 /// `touch` values of an entry `(i, j)`: j's sphere misses i's footprint
 /// even with the pose margin (0), reaches it only with the margin (1), or
-/// reaches it (2).
+/// reaches it (2); or not worked out yet (3), as for a candidate that came
+/// later than i in the order [`Contacts::update`] was given.
 const APART: u8 = 0;
 const TOUCHING: u8 = 2;
+const UNKNOWN: u8 = 3;
 
 impl Contacts {
     /// Every feather's footprint and sphere at its current pose, and for
-    /// every candidate entry `(i, j)` whether j's sphere reaches i's
-    /// footprint, with or without the pose margin.
+    /// every candidate entry `(i, j)` with j earlier than i by `rank`
+    /// whether j's sphere reaches i's footprint, with or without the pose
+    /// margin. Only an earlier candidate can be an obstacle, so the other
+    /// half of the entries waits until an order makes them earlier
+    /// ([`obstacle_rows`](Self::obstacle_rows)).
     #[allow(clippy::too_many_arguments)]
     pub fn update(
         &mut self,
@@ -175,6 +180,7 @@ impl Contacts {
         params: &AdjustParams,
         offsets: &[u32],
         indices: &[u32],
+        rank: &[u32],
     ) {
         let n = frames.len();
         if self.footprints.len() != n {
@@ -207,9 +213,7 @@ impl Contacts {
             let base = chunk * ENTRY_CHUNK;
             let entries = owner[base..base + out.len()].iter().zip(&indices[base..base + out.len()]);
             for (t, (&i, &j)) in out.iter_mut().zip(entries) {
-                let r = &reach2[j as usize];
-                let d2 = shadows[i as usize].distance2(r.centre);
-                *t = u8::from(d2 <= r.touch) + u8::from(d2 <= r.near);
+                *t = if rank[j as usize] < rank[i as usize] { touch(shadows, reach2, i, j) } else { UNKNOWN };
             }
         });
     }
@@ -224,7 +228,9 @@ impl Contacts {
         self.spheres[j]
     }
 
-    /// Whether candidate entry `e` (j in row i) touches i's footprint.
+    /// Whether candidate entry `e` (j in row i) touches i's footprint;
+    /// answered for a j earlier than i in the order given to
+    /// [`update`](Self::update) (false otherwise).
     #[inline]
     pub fn touching(&self, e: usize) -> bool {
         self.touch[e] == TOUCHING
@@ -240,12 +246,19 @@ impl Contacts {
         // every candidate, so the buffer never creeps up with the poses.
         self.indices.resize(indices.len(), 0);
         let mut len = 0;
+        let (shadows, reach2) = (&self.shadows, &self.reach2);
         for i in 0..offsets.len().saturating_sub(1) {
             let rank_i = rank[i];
             let row = offsets[i] as usize..offsets[i + 1] as usize;
-            for (&j, &touch) in indices[row.clone()].iter().zip(&self.touch[row]) {
+            for (&j, t) in indices[row.clone()].iter().zip(&mut self.touch[row]) {
+                let earlier = rank[j as usize] < rank_i;
+                if (*t == UNKNOWN) & earlier {
+                    // Earlier now, later when the contacts were worked out:
+                    // a reversal or a new pair of this frame (rare).
+                    *t = touch(shadows, reach2, i as u32, j);
+                }
                 self.indices[len] = j;
-                len += usize::from((touch != APART) & (rank[j as usize] < rank_i));
+                len += usize::from((*t != APART) & earlier);
             }
             self.offsets.push(len as u32);
         }
@@ -304,6 +317,14 @@ impl Contacts {
     }
 }
 
+/// The `touch` value of entry `(i, j)`: how j's sphere lies to i's footprint.
+#[inline]
+fn touch(shadows: &[Shadow], reach2: &[Reach2], i: u32, j: u32) -> u8 {
+    let r = &reach2[j as usize];
+    let d2 = shadows[i as usize].distance2(r.centre);
+    u8::from(d2 <= r.touch) + u8::from(d2 <= r.near)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -340,6 +361,44 @@ mod tests {
             }
             assert!(checked > 1000);
         }
+    }
+
+    /// Entries worked out late (their candidate was later in the order
+    /// `update` saw) give the rows an `update` with the final order gives.
+    #[test]
+    fn rows_do_not_depend_on_the_order_the_contacts_were_worked_out_in() {
+        use crate::ordering::{NeighbourParams, Neighbourhoods};
+        let mut rng = Rng::new(11);
+        let (w, h) = (12, 9);
+        let frames: Vec<RootFrame> = (0..w * h)
+            .map(|k| {
+                let at = Vec3::new((k % w) as f32 + 0.4 * rng.next_f32(), (k / w) as f32 + 0.4 * rng.next_f32(), 0.0);
+                let normal = Vec3::new(0.2 * rng.next_f32(), 0.2 * rng.next_f32(), 1.0);
+                RootFrame::from_normal_and_direction(at, normal, Vec3::new(1.0, 0.3 * rng.next_f32(), 0.0)).unwrap()
+            })
+            .collect();
+        let n = frames.len();
+        let shapes = vec![FeatherShape::for_spacing(1.0); n];
+        let poses: Vec<FeatherPose> =
+            (0..n).map(|_| FeatherPose::new(0.5 * rng.next_f32(), 0.2 * rng.next_f32() - 0.1)).collect();
+        let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
+        let mut nb = Neighbourhoods::new();
+        nb.rebuild(&frames, &reach, &NeighbourParams::default());
+        let (offsets, indices) = nb.obstacle_csr();
+        let params = AdjustParams::default();
+        // Two orders: by x, and by x with every other pair of neighbours swapped.
+        let by_x: Vec<u32> = (0..n as u32).map(|i| (i % w as u32) * h as u32 + i / w as u32).collect();
+        let swapped: Vec<u32> = by_x.iter().map(|&r| r ^ 1).collect();
+        let rows = |first: &[u32], last: &[u32]| {
+            let mut c = Contacts::default();
+            c.update(&frames, &shapes, &poses, &params, offsets, indices, first);
+            let (o, i) = c.obstacle_rows(offsets, indices, last);
+            (o.to_vec(), i.to_vec())
+        };
+        let late = rows(&by_x, &swapped);
+        assert_eq!(late, rows(&swapped, &swapped));
+        assert!(late.1.len() > n, "feathers have obstacles");
+        assert_ne!(late, rows(&by_x, &by_x), "the orders differ in the rows they give");
     }
 
     #[test]

@@ -114,7 +114,8 @@ pub fn step_coat(
         neighbourhood_seconds = neighbourhood_start.elapsed().as_secs_f64();
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices);
+    let rank = coat.order.ranks();
+    step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices, rank);
     progress.check(Phase::Ordering, 0.3)?;
 
     // 2. R_k from the relative motion of the roots since the last frame.
