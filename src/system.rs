@@ -8,6 +8,7 @@ use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
+use crate::feather::FeatherMesh;
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
@@ -164,6 +165,12 @@ impl System {
     /// order of [`System::feathers`].
     pub fn feather_triangles(&self) -> &[[[f32; 3]; 6]] {
         &self.triangles
+    }
+
+    /// Every feather as a mesh (vertices, normals, UVs, triangles, the
+    /// feather of each vertex), in the order of [`System::feathers`].
+    pub fn feather_mesh(&self) -> FeatherMesh {
+        FeatherMesh::build(&self.coat.frames, &self.dressing.shapes, &self.coat.poses)
     }
 
     /// Which feathers the last create, step or evaluate readjusted (one flag
