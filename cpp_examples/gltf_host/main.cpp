@@ -62,6 +62,8 @@ PlumageConfig make_config(const Options& opt) {
     if (opt.mode) cfg.mode = *opt.mode;
     if (opt.drift_tolerance_deg) cfg.drift_tolerance = static_cast<float>(*opt.drift_tolerance_deg * kPi / 180.0);
     if (opt.curvature_min_scale) cfg.curvature_min_scale = *opt.curvature_min_scale;
+    if (opt.shaft_segments) cfg.shaft_segments = *opt.shaft_segments;
+    if (opt.bend_limit_deg) cfg.bend_limit = static_cast<float>(*opt.bend_limit_deg * kPi / 180.0);
     if (opt.fluffiness_deg) cfg.fluffiness = static_cast<float>(*opt.fluffiness_deg * kPi / 180.0);
     if (opt.threads) cfg.threads = *opt.threads;
     return cfg;
@@ -149,7 +151,7 @@ public:
         report_.set_sampling(sampling_stats(*sys_));
         report_.set_ordering(ordering_stats(*sys_));
         report_.set_static(frame_stats(*sys_), opt_.validate != ValidateWhen::None ? validate(*sys_) : std::nullopt);
-        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_triangles(*sys_));
+        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
     }
 
     void step_frames() {
@@ -164,7 +166,7 @@ public:
             step_total_ += step_seconds;
             // Validation and copies happen after the clock stopped: not step time.
             const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
-            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_triangles(*sys_));
+            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_mesh(*sys_));
             report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage());
             progress_.frame_done(k + 1, times_.size(), step_seconds);
         }
