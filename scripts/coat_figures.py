@@ -13,6 +13,9 @@ feather with a length:
   pops %      share of feathers whose shaft angle to the body normal at the
               root changed by more than 5 degrees since the previous stepped
               frame (the first stepped frame has no previous one: "-")
+  body move   how far the body moved since the previous stepped frame: the
+              largest vertex displacement, in median feather lengths (context
+              for the pops: a still body should not pop its feathers)
 The body normal at a root is the welded body's smooth (area-weighted) vertex
 normal, interpolated at the closest point of the body to the root.
 
@@ -252,6 +255,8 @@ def coat_figures(path):
     welded = weld(coat["poses"][0]["body"])
     rows = []
     previous = None
+    lengths = np.linalg.norm(coat["poses"][0]["tip"] - coat["poses"][0]["root"], axis=1)
+    unit = float(np.median(lengths[lengths > 0])) if (lengths > 0).any() else 1.0
     for k, pose in enumerate(coat["poses"]):
         r = pose_figures(pose, tris, welded)
         angle = r.pop("_angle")
@@ -259,7 +264,9 @@ def coat_figures(path):
         if coat["times"] is not None and k > 0:
             r["seconds"] = float(coat["times"][k - 1])
         r["pops_percent"] = None
+        r["body_move"] = None
         if previous is not None:
+            r["body_move"] = float(np.linalg.norm(pose["body"] - coat["poses"][k - 1]["body"], axis=1).max()) / unit
             both = ~np.isnan(angle) & ~np.isnan(previous)
             r["pops_percent"] = 100.0 * float((np.abs(angle - previous)[both] > POP_DEGREES).sum()) / max(int(both.sum()), 1)
             r["max_angle_change_deg"] = float(np.abs(angle - previous)[both].max()) if both.any() else 0.0
@@ -282,6 +289,8 @@ def summary(rows):
         pops = [r["pops_percent"] for r in frames if r["pops_percent"] is not None]
         out["pops_percent_mean"] = float(np.mean(pops)) if pops else None
         out["pops_percent_max"] = float(np.max(pops)) if pops else None
+        moves = [r["body_move"] for r in frames if r["body_move"] is not None]
+        out["body_move_mean"] = float(np.mean(moves)) if moves else None
     return out
 
 
@@ -311,7 +320,7 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     results = {}
-    print(f"{'coat':<28} {'pose':<9} {'feathers':>8} {'median':>7} {'p90':>6} {'bristle%':>8} {'pops%':>6}")
+    print(f"{'coat':<28} {'pose':<9} {'feathers':>8} {'median':>7} {'p90':>6} {'bristle%':>8} {'pops%':>6} {'move':>5}")
     for path in paths:
         try:
             rows = coat_figures(path)
@@ -323,13 +332,13 @@ def main(argv):
         for r in rows if per_frame else rows[:1]:
             print(
                 f"{name:<28} {r['pose']:<9} {r['feathers']:>8} {fmt(r['tip_height_median']):>7} {fmt(r['tip_height_p90']):>6} "
-                f"{fmt(r['bristle_percent'], 1):>8} {fmt(r['pops_percent'], 1):>6}"
+                f"{fmt(r['bristle_percent'], 1):>8} {fmt(r['pops_percent'], 1):>6} {fmt(r['body_move']):>5}"
             )
         s = results[path]["summary"]
         if "frames" in s:
             print(
                 f"{name:<28} {'mean ' + str(s['frames']) + 'f':<9} {'':>8} {fmt(s['tip_height_median_mean']):>7} "
-                f"{fmt(s['tip_height_p90_mean']):>6} {fmt(s['bristle_percent_mean'], 1):>8} {fmt(s['pops_percent_mean'], 1):>6}"
+                f"{fmt(s['tip_height_p90_mean']):>6} {fmt(s['bristle_percent_mean'], 1):>8} {fmt(s['pops_percent_mean'], 1):>6} {fmt(s['body_move_mean']):>5}"
                 f"   (max: median {fmt(s['tip_height_median_max'])}, p90 {fmt(s['tip_height_p90_max'])},"
                 f" bristle {fmt(s['bristle_percent_max'], 1)}, pops {fmt(s['pops_percent_max'], 1)})"
             )
@@ -414,7 +423,7 @@ def self_test():
         tris = np.array([[f * layout + i for i in local] for f in range(len(roots))]).reshape(-1, 3)
         with tempfile.TemporaryDirectory() as d:
             path = os.path.join(d, "coat.glb")
-            _write_glb(path, floor, [floor, floor + [0, 0, 0]], floor_tris, feathers(pitches[0]), [feathers(p) for p in pitches[1:]], tris)
+            _write_glb(path, floor, [floor, floor + [0.5, 0, 0]], floor_tris, feathers(pitches[0]), [feathers(p) for p in pitches[1:]], tris)
             rows = coat_figures(path)
         heights = [sorted(np.sin(np.radians(p))) for p in pitches]
         checks = [
@@ -424,6 +433,7 @@ def self_test():
             (rows[0]["bristle_percent"] == 50.0, f"rest bristles {rows[0]['bristle_percent']}"),
             (rows[1]["pops_percent"] is None, "no previous frame for frame 0"),
             (rows[2]["pops_percent"] == 25.0, f"frame 1 pops {rows[2]['pops_percent']}"),
+            (rows[1]["body_move"] is None and abs(rows[2]["body_move"] - 0.5) < 1e-6, f"body moves {rows[1]['body_move']}, {rows[2]['body_move']}"),
             (abs(rows[2]["max_angle_change_deg"] - 10.0) < 1e-3, f"frame 1 largest change {rows[2].get('max_angle_change_deg')}"),
         ]
         for good, what in checks:
