@@ -14,11 +14,12 @@
 #   first seconds barely move, it walks from about 8 s)
 #   DATA=../shared/data (from the repo root)  BUILD=build  BLENDER=blender
 #   RENDER_GLB=/work/shared/tools/render_glb.py  PYTHON=python3 (with numpy)
-#   VIEWS="35,25 -145,25" (azimuth,elevation of each view)
+#   VIEWS="35,25 -145,25 35,25@2.2" (azimuth,elevation[@zoom] of each view; the
+#   third is a close-up of the middle of the body)
 # A model whose file is missing is reported and skipped (exit status 1 at the end).
 set -euo pipefail
 if [ $# -ne 1 ] || [ "${1#-}" != "$1" ]; then
-  sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 repo="$(cd "$(dirname "$0")/.." && pwd)"
@@ -32,7 +33,7 @@ BUILD="${BUILD:-$repo/build}"
 BLENDER="${BLENDER:-blender}"
 RENDER_GLB="${RENDER_GLB:-/work/shared/tools/render_glb.py}"
 PYTHON="${PYTHON:-python3}"
-VIEWS="${VIEWS:-35,25 -145,25}"
+VIEWS="${VIEWS:-35,25 -145,25 35,25@2.2}"
 
 for tool in cmake "$BLENDER" "$PYTHON"; do
   command -v "$tool" >/dev/null || { echo "render_coats.sh: $tool not found" >&2; exit 2; }
@@ -87,7 +88,9 @@ for entry in $MODELS; do
     for view in $VIEWS; do
       view_no=$((view_no + 1))
       prefix="$out/${name}_${kind}_v$view_no"
-      if ! "$BLENDER" -b --factory-startup --python "$RENDER_GLB" -- "$glb" "$prefix" "$bframe" --res "$RES" --view "$view" \
+      zoom=1
+      [ "${view#*@}" != "$view" ] && zoom="${view#*@}"
+      if ! "$BLENDER" -b --factory-startup --python "$RENDER_GLB" -- "$glb" "$prefix" "$bframe" --res "$RES" --view "${view%@*}" --zoom "$zoom" \
         >"$prefix.log" 2>&1 || ! grep -q '^wrote ' "$prefix.log"; then
         echo "render_coats.sh: render of $glb (view $view) failed, see $prefix.log" >&2
         status=1
