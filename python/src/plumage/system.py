@@ -460,7 +460,7 @@ class System:
     def load_state(self, blob: bytes) -> None:
         h = self._h()
         try:
-            data = bytes(blob)
+            data = memoryview(blob).tobytes()  # bytes-like only: bytes(5) would be five zero bytes
         except TypeError:
             raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"state: expected bytes, got {type(blob).__name__}") from None
         buf = (ctypes.c_uint8 * len(data)).from_buffer_copy(data) if data else (ctypes.c_uint8 * 1)()
