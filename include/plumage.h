@@ -175,6 +175,11 @@
 #define PLUMAGE_PHASE_ADJUSTING 3
 
 /**
+ * A tip farther than this off the skin, in feather lengths, is a bristle.
+ */
+#define BRISTLE_TIP_HEIGHT 0.5
+
+/**
  * An opaque feathering system. Create with `plumage_system_create`, free
  * with `plumage_system_destroy`.
  */
@@ -431,6 +436,111 @@ typedef struct PlumageFeather {
 } PlumageFeather;
 
 /**
+ * Caller buffers for `plumage_system_feather_geometry`: every feather as a
+ * mesh. Fill with `plumage_feather_geometry_init`, then point the buffers
+ * you want at your memory (NULL skips one); capacities count elements
+ * (floats, indices or bytes). The library writes the totals back.
+ *
+ * Layout: feathers one after the other, in the order of
+ * `plumage_system_feathers`; a feather's vertices are contiguous, and the
+ * layout (indices, UVs, vertex-to-feather map, counts) depends only on the
+ * configuration and the mesh, never on the frame, so a host can upload it
+ * once and refresh positions and normals each frame.
+ */
+typedef struct PlumageFeatherGeometry {
+  /**
+   * Set by `plumage_feather_geometry_init` to `sizeof(PlumageFeatherGeometry)`.
+   */
+  uint32_t struct_size;
+  /**
+   * Padding; always 0.
+   */
+  uint32_t reserved;
+  /**
+   * Out: number of feathers.
+   */
+  uint64_t feather_count;
+  /**
+   * Out: vertices of all feathers.
+   */
+  uint64_t vertex_count;
+  /**
+   * Out: triangles of all feathers.
+   */
+  uint64_t triangle_count;
+  /**
+   * xyz per vertex, world space (3 × vertex_count floats).
+   */
+  float *positions;
+  /**
+   * Capacity of `positions`, in floats.
+   */
+  size_t positions_capacity;
+  /**
+   * Unit normal per vertex, facing away from the skin on the feather's
+   * visible side (3 × vertex_count floats).
+   */
+  float *normals;
+  /**
+   * Capacity of `normals`, in floats.
+   */
+  size_t normals_capacity;
+  /**
+   * (u, v) per vertex: u from 0 at the root to 1 at the tip along the
+   * shaft, v from 0 to 1 across the vanes (0.5 on the shaft, 1 on the
+   * binormal side) (2 × vertex_count floats).
+   */
+  float *uvs;
+  /**
+   * Capacity of `uvs`, in floats.
+   */
+  size_t uvs_capacity;
+  /**
+   * Three vertex indices per triangle, into the whole vertex array, each
+   * triangle facing away from the skin (3 × triangle_count).
+   */
+  uint32_t *indices;
+  /**
+   * Capacity of `indices`, in indices.
+   */
+  size_t indices_capacity;
+  /**
+   * Per vertex: the index of its feather (vertex_count).
+   */
+  uint32_t *vertex_feathers;
+  /**
+   * Capacity of `vertex_feathers`.
+   */
+  size_t vertex_feathers_capacity;
+  /**
+   * Per feather: its vertex count (feather_count).
+   */
+  uint32_t *vertex_counts;
+  /**
+   * Capacity of `vertex_counts`.
+   */
+  size_t vertex_counts_capacity;
+  /**
+   * Per feather: its triangle count (feather_count).
+   */
+  uint32_t *triangle_counts;
+  /**
+   * Capacity of `triangle_counts`.
+   */
+  size_t triangle_counts_capacity;
+  /**
+   * Per feather: 1 when placed, 0 when left out (no size fitted; its
+   * vertices all lie at its root and its triangles have no area, so a
+   * host may skip it) (feather_count bytes).
+   */
+  uint8_t *placed;
+  /**
+   * Capacity of `placed`, in bytes.
+   */
+  size_t placed_capacity;
+} PlumageFeatherGeometry;
+
+/**
  * Sampling quality figures (`plumage_system_sampling_stats`). Set
  * `struct_size = sizeof(PlumageSamplingStats)` before the call.
  */
@@ -639,6 +749,20 @@ typedef struct PlumageValidation {
    * inside the body.
    */
   uint64_t buried_probes;
+  /**
+   * Median distance from a placed feather's tip to the body surface, in
+   * feather lengths (appended). A coat that lies down keeps it small.
+   */
+  double tip_height_median;
+  /**
+   * 90th percentile of the same, in feather lengths.
+   */
+  double tip_height_p90;
+  /**
+   * Percentage of placed feathers whose tip stands more than half a
+   * feather length off the skin (bristles).
+   */
+  double bristle_percent;
 } PlumageValidation;
 
 #ifdef __cplusplus
@@ -787,6 +911,34 @@ uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
                                           float *xyz,
                                           size_t capacity,
                                           size_t *out_len);
+
+/**
+ * Fills `geometry` with NULL buffers, zero capacities and totals, and sets
+ * `struct_size`. NULL is ignored.
+ *
+ * # Safety
+ * `geometry` is NULL or points to writable memory for one `PlumageFeatherGeometry`.
+ */
+void plumage_feather_geometry_init(struct PlumageFeatherGeometry *geometry);
+
+/**
+ * Copies every feather out as a mesh at the current pose: positions,
+ * normals, UVs, triangle indices, the feather of each vertex, per-feather
+ * vertex and triangle counts and whether each feather is placed (see
+ * `PlumageFeatherGeometry` for the layout). The totals are always written
+ * back. Each non-NULL buffer must hold what it is for; if any is too
+ * small the call returns PLUMAGE_STATUS_BUFFER_TOO_SMALL (naming it) and
+ * writes no buffer, so call once with no buffers to learn the totals.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `geometry`
+ * is NULL or points to a `PlumageFeatherGeometry` whose `struct_size` bytes
+ * are readable and writable and whose non-NULL buffers hold their stated
+ * capacities of writable elements.
+ */
+uint32_t plumage_system_feather_geometry(const struct PlumageSystem *sys,
+                                         struct PlumageFeatherGeometry *geometry);
 
 /**
  * Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when

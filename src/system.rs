@@ -8,6 +8,7 @@ use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
+use crate::feather::FeatherMesh;
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
@@ -166,6 +167,12 @@ impl System {
         &self.triangles
     }
 
+    /// Every feather as a mesh (vertices, normals, UVs, triangles, the
+    /// feather of each vertex), in the order of [`System::feathers`].
+    pub fn feather_mesh(&self) -> FeatherMesh {
+        FeatherMesh::build(&self.coat.frames, &self.dressing.shapes, &self.coat.poses)
+    }
+
     /// Which feathers the last create, step or evaluate readjusted (one flag
     /// per feather, in the order of [`System::feathers`]).
     pub fn readjusted(&self) -> &[bool] {
@@ -224,6 +231,9 @@ impl System {
             probes: v.probes,
             buried_probes: v.buried_probes,
             mean_pitch_deg: v.mean_pitch_deg,
+            tip_height_median: v.tip_heights.median,
+            tip_height_p90: v.tip_heights.p90,
+            bristle_percent: v.tip_heights.bristle_percent,
         })
     }
 

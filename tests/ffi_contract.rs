@@ -337,3 +337,114 @@ fn frame_stats_report_r_k_and_the_seeds() {
     assert!(s.adjusted > 0 && s.neighbourhood_seconds == 0.0, "{} adjusted, {} s", s.adjusted, s.neighbourhood_seconds);
     unsafe { plumage_system_destroy(sys) };
 }
+
+/// The feather geometry copy-out: totals with no buffers, a too-small buffer
+/// refused by name with nothing written, and a full copy consistent with the
+/// 18-float triangles of `plumage_system_feather_triangles`.
+#[test]
+fn feather_geometry_copy_out() {
+    let (pos, idx) = grid_soup();
+    let sys = create(&pos, &idx);
+    let mut g = std::mem::MaybeUninit::<PlumageFeatherGeometry>::uninit();
+    unsafe { plumage_feather_geometry_init(g.as_mut_ptr()) };
+    let mut g = unsafe { g.assume_init() };
+    assert_eq!(g.struct_size as usize, std::mem::size_of::<PlumageFeatherGeometry>());
+    assert_eq!(unsafe { plumage_system_feather_geometry(sys, &mut g) }, PLUMAGE_STATUS_OK);
+    let mut count = 0usize;
+    assert_eq!(unsafe { plumage_system_feather_count(sys, &mut count) }, PLUMAGE_STATUS_OK);
+    assert!(count > 0);
+    assert_eq!(g.feather_count as usize, count);
+    let (nv, nt) = (g.vertex_count as usize, g.triangle_count as usize);
+    assert!(nv >= 3 * count && nt >= count);
+
+    // One buffer too small: refused, named, nothing written.
+    let mut positions = vec![f32::NAN; 3 * nv];
+    let mut uvs = vec![-7.0f32; 2 * nv - 1];
+    g.positions = positions.as_mut_ptr();
+    g.positions_capacity = positions.len();
+    g.uvs = uvs.as_mut_ptr();
+    g.uvs_capacity = uvs.len();
+    assert_eq!(unsafe { plumage_system_feather_geometry(sys, &mut g) }, PLUMAGE_STATUS_BUFFER_TOO_SMALL);
+    assert!(system_error(sys).contains("uvs"), "{}", system_error(sys));
+    assert!(positions.iter().all(|p| p.is_nan()) && uvs.iter().all(|&u| u == -7.0));
+
+    // Everything.
+    let mut uvs = vec![0f32; 2 * nv];
+    let mut normals = vec![0f32; 3 * nv];
+    let mut indices = vec![0u32; 3 * nt];
+    let mut vertex_feathers = vec![0u32; nv];
+    let mut vertex_counts = vec![0u32; count];
+    let mut triangle_counts = vec![0u32; count];
+    let mut placed = vec![9u8; count];
+    g.uvs = uvs.as_mut_ptr();
+    g.uvs_capacity = uvs.len();
+    g.normals = normals.as_mut_ptr();
+    g.normals_capacity = normals.len();
+    g.indices = indices.as_mut_ptr();
+    g.indices_capacity = indices.len();
+    g.vertex_feathers = vertex_feathers.as_mut_ptr();
+    g.vertex_feathers_capacity = nv;
+    g.vertex_counts = vertex_counts.as_mut_ptr();
+    g.vertex_counts_capacity = count;
+    g.triangle_counts = triangle_counts.as_mut_ptr();
+    g.triangle_counts_capacity = count;
+    g.placed = placed.as_mut_ptr();
+    g.placed_capacity = count;
+    assert_eq!(unsafe { plumage_system_feather_geometry(sys, &mut g) }, PLUMAGE_STATUS_OK);
+    assert_eq!(vertex_counts.iter().map(|&c| c as usize).sum::<usize>(), nv);
+    assert_eq!(triangle_counts.iter().map(|&c| c as usize).sum::<usize>(), nt);
+    assert!(placed.iter().all(|&p| p <= 1));
+    assert!(uvs.iter().all(|u| (0.0..=1.0).contains(u)));
+    assert!(normals.chunks(3).all(|n| ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-4));
+    // Vertex feathers follow the counts; triangles stay within their feather.
+    let mut first = 0usize;
+    let mut tri = 0usize;
+    for f in 0..count {
+        let vc = vertex_counts[f] as usize;
+        assert!(vertex_feathers[first..first + vc].iter().all(|&v| v as usize == f));
+        for t in tri..tri + triangle_counts[f] as usize {
+            assert!(indices[3 * t..3 * t + 3].iter().all(|&i| (first..first + vc).contains(&(i as usize))));
+        }
+        first += vc;
+        tri += triangle_counts[f] as usize;
+    }
+    // The triangles are the 18-float ones, corner for corner.
+    let mut len = 0usize;
+    let mut flat = vec![0f32; 18 * count];
+    assert_eq!(
+        unsafe { plumage_system_feather_triangles(sys, flat.as_mut_ptr(), flat.len(), &mut len) },
+        PLUMAGE_STATUS_OK
+    );
+    assert_eq!(nt, 2 * count);
+    for t in 0..nt {
+        for c in 0..3 {
+            let v = indices[3 * t + c] as usize;
+            assert_eq!(&positions[3 * v..3 * v + 3], &flat[9 * t + 3 * c..9 * t + 3 * c + 3]);
+        }
+    }
+    assert_eq!(unsafe { plumage_system_feather_geometry(sys, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert_eq!(unsafe { plumage_system_feather_geometry(null(), &mut g) }, PLUMAGE_STATUS_NULL_POINTER);
+    unsafe { plumage_system_destroy(sys) };
+}
+
+/// Validation: the coat figures appended to `PlumageValidation`, and an
+/// older, shorter struct (up to `mean_pitch_deg`) filled up to its size.
+#[test]
+fn validation_reports_tip_heights_and_fills_older_structs() {
+    let (pos, idx) = grid_soup();
+    let sys = create(&pos, &idx);
+    let mut v =
+        PlumageValidation { struct_size: std::mem::size_of::<PlumageValidation>() as u32, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut v) }, PLUMAGE_STATUS_OK);
+    assert!(v.tip_height_median >= 0.0 && v.tip_height_median <= v.tip_height_p90 && v.tip_height_p90 <= 1.0);
+    assert!((0.0..=100.0).contains(&v.bristle_percent));
+    let old = std::mem::offset_of!(PlumageValidation, probes);
+    let mut short = PlumageValidation { struct_size: old as u32, tip_height_p90: -3.0, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut short) }, PLUMAGE_STATUS_OK);
+    assert_eq!(short.struct_size as usize, old);
+    assert_eq!(short.coverage, v.coverage);
+    assert_eq!(short.tip_height_p90, -3.0, "bytes past struct_size are not written");
+    let mut tiny = PlumageValidation { struct_size: 8, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut tiny) }, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
+    unsafe { plumage_system_destroy(sys) };
+}

@@ -10,7 +10,9 @@ pub use boundary::PlumageSystem;
 pub use status::*;
 pub use types::*;
 
-use boundary::{Failure, copy_out, thread_error, with_system, with_system_ref, without_system, write_versioned};
+use boundary::{
+    Failure, copy_out, read_versioned, thread_error, with_system, with_system_ref, without_system, write_versioned,
+};
 use std::ffi::c_char;
 
 /// The ABI version of this header; bumped only by incompatible changes.
@@ -252,6 +254,118 @@ pub unsafe extern "C" fn plumage_system_feather_triangles(
     })
 }
 
+/// Fills `geometry` with NULL buffers, zero capacities and totals, and sets
+/// `struct_size`. NULL is ignored.
+///
+/// # Safety
+/// `geometry` is NULL or points to writable memory for one `PlumageFeatherGeometry`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_feather_geometry_init(geometry: *mut PlumageFeatherGeometry) {
+    if geometry.is_null() {
+        return;
+    }
+    // SAFETY: non-NULL, points to a PlumageFeatherGeometry (contract).
+    unsafe { geometry.write(PlumageFeatherGeometry::empty()) };
+}
+
+/// Copies every feather out as a mesh at the current pose: positions,
+/// normals, UVs, triangle indices, the feather of each vertex, per-feather
+/// vertex and triangle counts and whether each feather is placed (see
+/// `PlumageFeatherGeometry` for the layout). The totals are always written
+/// back. Each non-NULL buffer must hold what it is for; if any is too
+/// small the call returns PLUMAGE_STATUS_BUFFER_TOO_SMALL (naming it) and
+/// writes no buffer, so call once with no buffers to learn the totals.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `geometry`
+/// is NULL or points to a `PlumageFeatherGeometry` whose `struct_size` bytes
+/// are readable and writable and whose non-NULL buffers hold their stated
+/// capacities of writable elements.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_feather_geometry(
+    sys: *const PlumageSystem,
+    geometry: *mut PlumageFeatherGeometry,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        if geometry.is_null() {
+            return Err(Failure::null("geometry"));
+        }
+        let size = std::mem::size_of::<PlumageFeatherGeometry>();
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        let mut io =
+            unsafe { read_versioned(geometry, size, PlumageFeatherGeometry::empty(), "PlumageFeatherGeometry") }?;
+        let mesh = system.feather_mesh();
+        io.feather_count = mesh.vertex_counts.len() as u64;
+        io.vertex_count = mesh.positions.len() as u64;
+        io.triangle_count = mesh.indices.len() as u64;
+        // SAFETY: as above; only the totals change.
+        unsafe { write_versioned(geometry, size, io, "PlumageFeatherGeometry") }?;
+        let flat = |v: &[[f32; 3]]| v.as_flattened().to_vec();
+        let buffers = GeometryBuffers {
+            floats: [
+                ("positions", io.positions, io.positions_capacity, flat(&mesh.positions)),
+                ("normals", io.normals, io.normals_capacity, flat(&mesh.normals)),
+                ("uvs", io.uvs, io.uvs_capacity, mesh.uvs.as_flattened().to_vec()),
+            ],
+            indices: [
+                ("indices", io.indices, io.indices_capacity, mesh.indices.as_flattened().to_vec()),
+                ("vertex_feathers", io.vertex_feathers, io.vertex_feathers_capacity, mesh.vertex_feathers),
+                ("vertex_counts", io.vertex_counts, io.vertex_counts_capacity, mesh.vertex_counts),
+                ("triangle_counts", io.triangle_counts, io.triangle_counts_capacity, mesh.triangle_counts),
+            ],
+            bytes: [("placed", io.placed, io.placed_capacity, mesh.placed)],
+        };
+        buffers.check()?;
+        // SAFETY: every non-NULL buffer holds its capacity (contract), checked above to be enough.
+        unsafe { buffers.write() };
+        Ok(())
+    })
+}
+
+/// The buffers of one `plumage_system_feather_geometry` call with what
+/// goes into each: (name, caller pointer, capacity, contents).
+struct GeometryBuffers {
+    floats: [(&'static str, *mut f32, usize, Vec<f32>); 3],
+    indices: [(&'static str, *mut u32, usize, Vec<u32>); 4],
+    bytes: [(&'static str, *mut u8, usize, Vec<u8>); 1],
+}
+
+impl GeometryBuffers {
+    /// Refuses the call when a given buffer is too small for its contents.
+    fn check(&self) -> Result<(), Failure> {
+        let sizes = self.floats.iter().map(|(n, p, c, v)| (*n, p.is_null(), *c, v.len()));
+        let sizes = sizes
+            .chain(self.indices.iter().map(|(n, p, c, v)| (*n, p.is_null(), *c, v.len())))
+            .chain(self.bytes.iter().map(|(n, p, c, v)| (*n, p.is_null(), *c, v.len())));
+        for (name, null, capacity, needed) in sizes {
+            if !null && capacity < needed {
+                return Err(Failure::new(
+                    PLUMAGE_STATUS_BUFFER_TOO_SMALL,
+                    format!("PlumageFeatherGeometry.{name} holds {capacity} elements but {needed} are needed"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Copies the contents into every non-NULL buffer.
+    ///
+    /// # Safety
+    /// Every non-NULL pointer holds at least as many elements as its contents.
+    unsafe fn write(&self) {
+        fn put<T: Copy>(ptr: *mut T, items: &[T]) {
+            if !ptr.is_null() {
+                // SAFETY: the caller's buffer holds items.len() elements (checked).
+                unsafe { std::ptr::copy_nonoverlapping(items.as_ptr(), ptr, items.len()) };
+            }
+        }
+        self.floats.iter().for_each(|(_, p, _, v)| put(*p, v));
+        self.indices.iter().for_each(|(_, p, _, v)| put(*p, v));
+        self.bytes.iter().for_each(|(_, p, _, v)| put(*p, v));
+    }
+}
+
 /// Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
 /// no roots have been planted.
 ///
@@ -353,7 +467,7 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
             levels: r.levels as u64,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
-        unsafe { write_versioned(out, std::mem::size_of::<PlumageFrameStats>(), value, "PlumageFrameStats") }
+        unsafe { write_versioned(out, FRAME_STATS_V1_SIZE, value, "PlumageFrameStats") }
     })
 }
 
@@ -382,9 +496,12 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
             mean_pitch_deg: r.mean_pitch_deg,
             probes: r.probes as u64,
             buried_probes: r.buried_probes as u64,
+            tip_height_median: r.tip_height_median,
+            tip_height_p90: r.tip_height_p90,
+            bristle_percent: r.bristle_percent,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
-        unsafe { write_versioned(out, std::mem::size_of::<PlumageValidation>(), value, "PlumageValidation") }
+        unsafe { write_versioned(out, VALIDATION_V1_SIZE, value, "PlumageValidation") }
     })
 }
 

@@ -552,7 +552,116 @@ pub struct PlumageValidation {
     /// Probes of the feathered skin left out of `coverage` because they lie
     /// inside the body.
     pub buried_probes: u64,
+    /// Median distance from a placed feather's tip to the body surface, in
+    /// feather lengths (appended). A coat that lies down keeps it small.
+    pub tip_height_median: f64,
+    /// 90th percentile of the same, in feather lengths.
+    pub tip_height_p90: f64,
+    /// Percentage of placed feathers whose tip stands more than half a
+    /// feather length off the skin (bristles).
+    pub bristle_percent: f64,
 }
+
+/// Caller buffers for `plumage_system_feather_geometry`: every feather as a
+/// mesh. Fill with `plumage_feather_geometry_init`, then point the buffers
+/// you want at your memory (NULL skips one); capacities count elements
+/// (floats, indices or bytes). The library writes the totals back.
+///
+/// Layout: feathers one after the other, in the order of
+/// `plumage_system_feathers`; a feather's vertices are contiguous, and the
+/// layout (indices, UVs, vertex-to-feather map, counts) depends only on the
+/// configuration and the mesh, never on the frame, so a host can upload it
+/// once and refresh positions and normals each frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlumageFeatherGeometry {
+    /// Set by `plumage_feather_geometry_init` to `sizeof(PlumageFeatherGeometry)`.
+    pub struct_size: u32,
+    /// Padding; always 0.
+    pub reserved: u32,
+    /// Out: number of feathers.
+    pub feather_count: u64,
+    /// Out: vertices of all feathers.
+    pub vertex_count: u64,
+    /// Out: triangles of all feathers.
+    pub triangle_count: u64,
+    /// xyz per vertex, world space (3 × vertex_count floats).
+    pub positions: *mut f32,
+    /// Capacity of `positions`, in floats.
+    pub positions_capacity: usize,
+    /// Unit normal per vertex, facing away from the skin on the feather's
+    /// visible side (3 × vertex_count floats).
+    pub normals: *mut f32,
+    /// Capacity of `normals`, in floats.
+    pub normals_capacity: usize,
+    /// (u, v) per vertex: u from 0 at the root to 1 at the tip along the
+    /// shaft, v from 0 to 1 across the vanes (0.5 on the shaft, 1 on the
+    /// binormal side) (2 × vertex_count floats).
+    pub uvs: *mut f32,
+    /// Capacity of `uvs`, in floats.
+    pub uvs_capacity: usize,
+    /// Three vertex indices per triangle, into the whole vertex array, each
+    /// triangle facing away from the skin (3 × triangle_count).
+    pub indices: *mut u32,
+    /// Capacity of `indices`, in indices.
+    pub indices_capacity: usize,
+    /// Per vertex: the index of its feather (vertex_count).
+    pub vertex_feathers: *mut u32,
+    /// Capacity of `vertex_feathers`.
+    pub vertex_feathers_capacity: usize,
+    /// Per feather: its vertex count (feather_count).
+    pub vertex_counts: *mut u32,
+    /// Capacity of `vertex_counts`.
+    pub vertex_counts_capacity: usize,
+    /// Per feather: its triangle count (feather_count).
+    pub triangle_counts: *mut u32,
+    /// Capacity of `triangle_counts`.
+    pub triangle_counts_capacity: usize,
+    /// Per feather: 1 when placed, 0 when left out (no size fitted; its
+    /// vertices all lie at its root and its triangles have no area, so a
+    /// host may skip it) (feather_count bytes).
+    pub placed: *mut u8,
+    /// Capacity of `placed`, in bytes.
+    pub placed_capacity: usize,
+}
+
+impl PlumageFeatherGeometry {
+    /// No buffers, no totals, `struct_size` set.
+    pub(crate) fn empty() -> Self {
+        let null_f = std::ptr::null_mut();
+        let null_u = std::ptr::null_mut();
+        Self {
+            struct_size: std::mem::size_of::<Self>() as u32,
+            reserved: 0,
+            feather_count: 0,
+            vertex_count: 0,
+            triangle_count: 0,
+            positions: null_f,
+            positions_capacity: 0,
+            normals: null_f,
+            normals_capacity: 0,
+            uvs: null_f,
+            uvs_capacity: 0,
+            indices: null_u,
+            indices_capacity: 0,
+            vertex_feathers: null_u,
+            vertex_feathers_capacity: 0,
+            vertex_counts: null_u,
+            vertex_counts_capacity: 0,
+            triangle_counts: null_u,
+            triangle_counts_capacity: 0,
+            placed: std::ptr::null_mut(),
+            placed_capacity: 0,
+        }
+    }
+}
+
+/// The first published layout of `PlumageValidation` (up to
+/// `mean_pitch_deg`): older callers' structs are filled up to their size.
+pub(crate) const VALIDATION_V1_SIZE: usize = std::mem::offset_of!(PlumageValidation, probes);
+/// The layout of `PlumageFrameStats` before `neighbourhood_seconds` was
+/// appended: such structs are filled up to their size.
+pub(crate) const FRAME_STATS_V1_SIZE: usize = std::mem::offset_of!(PlumageFrameStats, neighbourhood_seconds);
 
 // Every struct the library copies out must be free of padding, so that the
 // bytes a host sees are fully defined (and comparable with memcmp).
@@ -562,5 +671,5 @@ const _: () = {
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 17);
-    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 6);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
 };

@@ -1,0 +1,18 @@
+//! The feather as geometry, in one place (DESIGN.md §4): its shape, its pose
+//! and the posed feather (triangles, shaft, normal, tip), and the mesh a
+//! host copies out (vertices, triangles, UVs, normals).
+//!
+//! Local coordinates follow [`RootFrame`](crate::geometry::RootFrame): x
+//! along the tangential orientation `õ`, y along the binormal `b`, z along
+//! the normal `n`. Before posing the kite lies in the tangent plane: root
+//! (0,0,0), tip (L,0,0), vane corners (s_w·L, ±W/2, 0). It is two
+//! triangles, one per vane, sharing the shaft.
+
+mod mesh;
+mod pose;
+mod shape;
+
+pub use mesh::{FeatherMesh, FeatherMeshLayout};
+pub use pose::{FeatherPose, feather_normal, feather_triangles, shaft_direction, tip_position};
+pub use shape::FeatherShape;
+pub(crate) use shape::LENGTH_PER_SPACING;

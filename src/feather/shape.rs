@@ -1,0 +1,124 @@
+//! The feather's dimensions and outline (DESIGN.md §4): length, width,
+//! thickness and where the vanes are widest.
+
+use glam::Vec3;
+
+/// Length of a feather as a multiple of the local spacing `d`. A feather
+/// then reaches over three to four rows of neighbours, so every point of the
+/// skin is covered two to three times, as on a real bird. (3.5 d left more
+/// skin bare where feathers pitch up or are shortened: at 4 d the exact
+/// coverage of the test coats rose by 0.5–1.5 points for half a degree more
+/// mean pitch.)
+pub(crate) const LENGTH_PER_SPACING: f32 = 4.0;
+/// Width as a multiple of `d`: the vanes reach a little past the lateral
+/// neighbours, so neighbouring feathers overlap sideways too.
+pub(crate) const WIDTH_PER_SPACING: f32 = 1.75;
+/// Thickness as a fraction of the width (a contour feather's vane is thin;
+/// this sets how steeply stacked feathers climb).
+pub(crate) const THICKNESS_PER_WIDTH: f32 = 0.04;
+/// Where the vane corners sit along the shaft, as a fraction of the length.
+pub(crate) const DEFAULT_VANE_SPLIT: f32 = 0.4;
+
+/// Dimensions of one feather, in model units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeatherShape {
+    /// Shaft length `L` (root to tip).
+    pub length: f32,
+    /// Vane width `W` (corner to corner).
+    pub width: f32,
+    /// Thickness `t`: how far above its own triangles a feather's top is.
+    pub thickness: f32,
+    /// `s_w`: where the vane corners sit along the shaft, as a fraction of
+    /// the length (0 < s_w < 1).
+    pub vane_split: f32,
+}
+
+impl FeatherShape {
+    /// The default shape for local spacing `d` (Poisson-disk radius):
+    /// length 4 d, width 1.75 d, thickness 4 % of the width (0.07 d), vane
+    /// corners at 40 % of the length. With roots about d apart a feather
+    /// covers its neighbours ahead over three to four rows and half of each lateral
+    /// neighbour, so the coat is closed, and the small thickness keeps
+    /// stacked feathers nearly flat (a few degrees of pitch).
+    pub fn for_spacing(d: f32) -> Self {
+        let width = WIDTH_PER_SPACING * d;
+        Self {
+            length: LENGTH_PER_SPACING * d,
+            width,
+            thickness: THICKNESS_PER_WIDTH * width,
+            vane_split: DEFAULT_VANE_SPLIT,
+        }
+    }
+
+    /// The default shape for spacing `d` with global overrides: any of
+    /// `length`, `width`, `thickness` that is > 0 replaces the rule (a given
+    /// width also sets the default thickness, 4 % of it).
+    pub fn with_overrides(d: f32, length: f32, width: f32, thickness: f32) -> Self {
+        let mut s = Self::for_spacing(d);
+        if length > 0.0 {
+            s.length = length;
+        }
+        if width > 0.0 {
+            s.width = width;
+            s.thickness = THICKNESS_PER_WIDTH * width;
+        }
+        if thickness > 0.0 {
+            s.thickness = thickness;
+        }
+        s
+    }
+
+    /// Half the vane width at distance `x` along the flat shaft: 0 at the
+    /// root and the tip, `W/2` at the vane corners, linear in between;
+    /// negative outside `[0, L]`.
+    #[inline]
+    pub fn half_width_at(&self, x: f32) -> f32 {
+        let corner = self.vane_split * self.length;
+        let half = 0.5 * self.width;
+        if x < 0.0 || x > self.length {
+            -1.0
+        } else if x <= corner {
+            half * x / corner
+        } else {
+            half * (self.length - x) / (self.length - corner)
+        }
+    }
+
+    /// This shape shrunk by `scale` about the root: length and width scale,
+    /// the thickness (and so the clearance over it) stays. The shrunk kite
+    /// lies inside the full one, since the kite is convex and holds its root.
+    #[inline]
+    pub fn scaled(&self, scale: f32) -> Self {
+        Self { length: self.length * scale, width: self.width * scale, ..*self }
+    }
+
+    /// The flat kite in local coordinates: root, tip, +y corner, −y corner.
+    pub fn kite_corners(&self) -> [Vec3; 4] {
+        let cx = self.vane_split * self.length;
+        let hw = 0.5 * self.width;
+        [Vec3::ZERO, Vec3::new(self.length, 0.0, 0.0), Vec3::new(cx, hw, 0.0), Vec3::new(cx, -hw, 0.0)]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_width_is_a_kite() {
+        let s = FeatherShape { length: 10.0, width: 4.0, thickness: 0.1, vane_split: 0.4 };
+        assert_eq!(s.half_width_at(0.0), 0.0);
+        assert!((s.half_width_at(4.0) - 2.0).abs() < 1e-6);
+        assert!((s.half_width_at(7.0) - 1.0).abs() < 1e-6);
+        assert!(s.half_width_at(10.5) < 0.0 && s.half_width_at(-0.1) < 0.0);
+    }
+
+    #[test]
+    fn overrides_replace_the_rules() {
+        let s = FeatherShape::with_overrides(1.0, 0.0, 3.0, 0.0);
+        assert_eq!(s.length, 4.0);
+        assert_eq!(s.width, 3.0);
+        assert!((s.thickness - 0.12).abs() < 1e-6);
+        assert_eq!(FeatherShape::with_overrides(1.0, 2.0, 0.0, 0.5).thickness, 0.5);
+    }
+}
