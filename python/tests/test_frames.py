@@ -44,27 +44,41 @@ def test_save_load_round_trip_gives_identical_next_steps(sphere) -> None:
             assert fresh.feather_triangles().tobytes() == after_save[1]
 
 
-def test_feather_geometry_is_the_kites_as_an_indexed_mesh(sphere) -> None:
+def test_feather_geometry_matches_the_feathers_and_their_triangles(sphere) -> None:
+    v, _ = sphere
     with run(sphere, 1, frames=1) as s:
         geo = s.feather_geometry()
+        feathers = s.feathers()
         kites = s.feather_triangles()
         f = s.feather_count
-        assert kites.shape == (f, 6, 3)
-        assert geo.positions.shape == (4 * f, 3) and geo.positions.dtype == np.float32
-        assert geo.triangles.shape == (2 * f, 3) and geo.triangles.dtype == np.uint32
-        # the indexed triangles give back the library's 18 floats per feather, bit for bit
-        assert geo.positions[geo.triangles].reshape(f, 6, 3).tobytes() == kites.tobytes()
-        assert np.array_equal(geo.feather_index, np.repeat(np.arange(f), 4))
-        assert np.array_equal(geo.ids, s.feathers()["id"])
-        assert len(np.unique(geo.ids)) == f
-        assert geo.vertex_counts.sum() == len(geo.positions) and geo.triangle_counts.sum() == len(geo.triangles)
-        # normals are unit length and face away from the skin like the feathers' own normals
-        lengths = np.linalg.norm(geo.normals, axis=1)
-        placed = s.feathers()["length"] > 0
-        per_vertex_placed = np.repeat(placed, 4)
-        assert np.allclose(lengths[per_vertex_placed], 1.0, atol=1e-5)
-        facing = np.einsum("ij,ij->i", geo.normals[::4][placed], s.feathers()["normal"][placed])
+        nv, nt = len(geo.positions), len(geo.triangles)
+        assert geo.positions.dtype == np.float32 and geo.triangles.dtype == np.uint32
+        assert geo.normals.shape == (nv, 3) and geo.uvs.shape == (nv, 2) and geo.feather_index.shape == (nv,)
+        assert geo.vertex_counts.sum() == nv and geo.triangle_counts.sum() == nt and len(geo.vertex_counts) == f
+        assert np.array_equal(geo.ids, feathers["id"]) and len(np.unique(geo.ids)) == f
+        assert np.array_equal(geo.feather_index, np.repeat(np.arange(f), geo.vertex_counts))
+        assert np.array_equal(geo.placed, feathers["length"] > 0)
+        assert geo.triangles.max() < nv
+        # each triangle stays within its feather's vertices
+        assert np.array_equal(geo.feather_index[geo.triangles[:, 0]], np.repeat(np.arange(f), geo.triangle_counts))
+        assert (geo.feather_index[geo.triangles] == geo.feather_index[geo.triangles[:, :1]]).all()
+        # two triangles per feather today: they are plumage_system_feather_triangles, bit for bit
+        if nt == 2 * f:
+            assert geo.positions[geo.triangles].reshape(f, 6, 3).tobytes() == kites.tobytes()
+        assert ((geo.uvs >= 0) & (geo.uvs <= 1)).all()
+        first = np.concatenate([[0], np.cumsum(geo.vertex_counts)[:-1]]).astype(np.intp)
+        # the first vertex of a placed feather is its root (u 0, on the shaft)
+        assert np.allclose(geo.positions[first], feathers["root"], atol=1e-5)
+        assert np.allclose(geo.uvs[first], [0.0, 0.5])
+        assert np.allclose(np.linalg.norm(geo.normals, axis=1), 1.0, atol=1e-4)
+        facing = np.einsum("ij,ij->i", geo.normals[first][geo.placed], feathers["normal"][geo.placed])
         assert (facing > 0).mean() > 0.95
+        # only positions and normals move from frame to frame
+        s.step(wobble(v, 2))
+        later = s.feather_geometry()
+        for name in ("uvs", "triangles", "feather_index", "vertex_counts", "triangle_counts", "ids"):
+            assert np.array_equal(getattr(later, name), getattr(geo, name)), name
+        assert not np.array_equal(later.positions, geo.positions)
 
 
 def test_figures_after_create_and_steps(sphere) -> None:

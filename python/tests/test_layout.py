@@ -22,6 +22,7 @@ STRUCTS = {
     "PlumageOrderingStats": _ffi.OrderingStats,
     "PlumageFrameStats": _ffi.FrameStats,
     "PlumageValidation": _ffi.Validation,
+    "PlumageFeatherGeometry": _ffi.FeatherGeometry,
 }
 
 
@@ -32,6 +33,9 @@ def test_init_functions_report_the_size_of_the_mirrored_structs() -> None:
     desc = _ffi.MeshDesc()
     _ffi.lib.plumage_mesh_desc_init(ctypes.byref(desc))
     assert desc.struct_size == ctypes.sizeof(_ffi.MeshDesc)
+    geo = _ffi.FeatherGeometry()
+    _ffi.lib.plumage_feather_geometry_init(ctypes.byref(geo))
+    assert geo.struct_size == ctypes.sizeof(_ffi.FeatherGeometry)
 
 
 def test_stats_structs_are_filled_whole(sphere) -> None:

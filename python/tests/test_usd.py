@@ -47,15 +47,17 @@ def check_stage(path, poses, glb) -> None:
         pv = UsdGeom.PrimvarsAPI(feathers.GetPrim())
         usd_ids = np.array(pv.GetPrimvar("id").Get(), dtype=np.int64).view(np.uint64)
         assert pv.GetPrimvar("id").GetInterpolation() == UsdGeom.Tokens.uniform
+        geo = s.feather_geometry()
         counts = np.array(feathers.GetFaceVertexCountsAttr().Get())
-        assert len(usd_ids) == len(counts) == 2 * s.feather_count
-        assert np.array_equal(usd_ids[::2], ids) and np.array_equal(usd_ids[1::2], ids)
-        index = np.array(pv.GetPrimvar("featherIndex").Get())
-        assert index.max() + 1 == s.feather_count
-        last_frame_ours = None
+        assert len(usd_ids) == len(counts) == len(geo.triangles)
+        assert np.array_equal(usd_ids, np.repeat(ids, geo.triangle_counts))
+        assert np.array_equal(np.array(pv.GetPrimvar("featherIndex").Get()), geo.feather_index)
+        st = pv.GetPrimvar("st")
+        assert st.GetInterpolation() == UsdGeom.Tokens.vertex
+        assert np.array_equal(np.array(st.Get(), dtype=np.float32), geo.uvs)
         for frame in poses.frames:
             s.step(frame)
-        last_frame_ours = s.feather_triangles()
+        last_frame_ours = s.feather_geometry()
 
     # points of each frame: those of the host's .glb of the same run
     body_base, body_idx, body_frames = glb_mesh_frames(glb, "body")
@@ -69,7 +71,8 @@ def check_stage(path, poses, glb) -> None:
         assert np.abs(bp - body_frames[k]).max() <= 1e-6 * scale
         fp = np.array(feathers.GetPointsAttr().Get(code), dtype=np.float32)
         assert np.abs(fp[usd_idx] - f_frames[k][f_idx]).max() <= 1e-6 * scale
-    assert fp[usd_idx].reshape(-1, 6, 3).tobytes() == last_frame_ours.tobytes()
+    assert fp.tobytes() == last_frame_ours.positions.tobytes()
+    assert np.array(feathers.GetNormalsAttr().Get(codes[-1]), dtype=np.float32).tobytes() == last_frame_ours.normals.tobytes()
     # the default (untimed) value is the rest pose, bit for bit the host's
     rest_pts = np.array(feathers.GetPointsAttr().Get(), dtype=np.float32)
     assert rest_pts[usd_idx].tobytes() == f_base[f_idx].tobytes()
@@ -98,3 +101,25 @@ def test_dress_reports_failures(host, tmp_path) -> None:
                             env={"PATH": "/usr/bin:/bin"})
     assert nohost.returncode == 2 and "plumage_gltf was not found" in nohost.stderr
     assert not (tmp_path / "x.usda").exists()
+
+
+def test_frame_vertices_are_matched_to_the_rest_order_by_id() -> None:
+    from plumage.usd import matching_vertices
+
+    def geometry(ids, counts, base):
+        counts = np.array(counts, dtype=np.uint32)
+        n = int(counts.sum())
+        pts = base + np.arange(n, dtype=np.float32)[:, None] * np.ones(3, np.float32)
+        return plumage.FeatherGeometry(
+            positions=pts, normals=pts, uvs=np.zeros((n, 2), np.float32), triangles=np.zeros((0, 3), np.uint32),
+            feather_index=np.repeat(np.arange(len(ids)), counts).astype(np.uint32), ids=np.array(ids, dtype=np.uint64),
+            vertex_counts=counts, triangle_counts=np.zeros(len(ids), np.uint32), placed=np.ones(len(ids), bool))
+
+    rest = geometry([30, 10, 20], [4, 3, 4], 0.0)
+    frame = geometry([20, 99, 30], [4, 2, 4], 100.0)  # 10 absent, 99 unknown at rest
+    dest, src = matching_vertices(rest, frame)
+    # rest rows: 30 -> 0..3, 10 -> 4..6, 20 -> 7..10; frame rows: 20 -> 0..3, 99 -> 4..5, 30 -> 6..9
+    assert list(dest) == [7, 8, 9, 10, 0, 1, 2, 3]
+    assert list(src) == [0, 1, 2, 3, 6, 7, 8, 9]
+    with pytest.raises(ValueError, match="vertex count changed"):
+        matching_vertices(rest, geometry([10], [5], 0.0))

@@ -153,6 +153,35 @@ class Validation(ctypes.Structure):
         ("mean_pitch_deg", ctypes.c_double),
         ("probes", c_uint64),
         ("buried_probes", c_uint64),
+        ("tip_height_median", ctypes.c_double),
+        ("tip_height_p90", ctypes.c_double),
+        ("bristle_percent", ctypes.c_double),
+    ]
+
+
+class FeatherGeometry(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("reserved", c_uint32),
+        ("feather_count", c_uint64),
+        ("vertex_count", c_uint64),
+        ("triangle_count", c_uint64),
+        ("positions", POINTER(c_float)),
+        ("positions_capacity", c_size_t),
+        ("normals", POINTER(c_float)),
+        ("normals_capacity", c_size_t),
+        ("uvs", POINTER(c_float)),
+        ("uvs_capacity", c_size_t),
+        ("indices", POINTER(c_uint32)),
+        ("indices_capacity", c_size_t),
+        ("vertex_feathers", POINTER(c_uint32)),
+        ("vertex_feathers_capacity", c_size_t),
+        ("vertex_counts", POINTER(c_uint32)),
+        ("vertex_counts_capacity", c_size_t),
+        ("triangle_counts", POINTER(c_uint32)),
+        ("triangle_counts_capacity", c_size_t),
+        ("placed", POINTER(c_uint8)),
+        ("placed_capacity", c_size_t),
     ]
 
 
@@ -182,6 +211,8 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_system_vertex_count": (c_uint32, [sys_p, size_p]),
         "plumage_system_feathers": (c_uint32, [sys_p, POINTER(Feather), c_size_t, size_p]),
         "plumage_system_feather_triangles": (c_uint32, [sys_p, f_p, c_size_t, size_p]),
+        "plumage_feather_geometry_init": (None, [POINTER(FeatherGeometry)]),
+        "plumage_system_feather_geometry": (c_uint32, [sys_p, POINTER(FeatherGeometry)]),
         "plumage_system_sampling_stats": (c_uint32, [sys_p, POINTER(SamplingStats)]),
         "plumage_system_ordering_stats": (c_uint32, [sys_p, POINTER(OrderingStats)]),
         "plumage_system_frame_stats": (c_uint32, [sys_p, POINTER(FrameStats)]),
@@ -223,7 +254,7 @@ lib = _load()
 
 
 def status_name(status: int) -> str:
-    return lib.plumage_status_name(status).decode()
+    return str(lib.plumage_status_name(status).decode())
 
 
 def last_error(sys_handle: int | None) -> str:
@@ -232,4 +263,4 @@ def last_error(sys_handle: int | None) -> str:
         return ""
     buf = ctypes.create_string_buffer(needed)
     lib.plumage_system_last_error(sys_handle, buf, needed)
-    return buf.value.decode("utf-8", "replace")
+    return str(buf.value.decode("utf-8", "replace"))

@@ -33,12 +33,12 @@ class Poses:
     frames: npt.NDArray[np.float32]  # (frames, n, 3)
     fps: float
     config: Dict[str, Any]  # keyword arguments of plumage.System
-    maps: Dict[str, npt.NDArray[np.float32]]  # keyword arguments of plumage.System (those present)
+    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays
 
 
 def config_from_struct(raw: _ffi.Config) -> Dict[str, Any]:
     out: Dict[str, Any] = {}
-    for name, _ in _ffi.Config._fields_:
+    for name in (f[0] for f in _ffi.Config._fields_):
         if name in ("struct_size", "progress", "progress_user_data", "flow_source_enabled"):
             continue
         v = getattr(raw, name)
@@ -77,7 +77,7 @@ def read_poses(path: Union[str, Path]) -> Poses:
     rest = take("<f4", 3 * nv).reshape(-1, 3)
     triangles = take("<u4", 3 * nt).reshape(-1, 3)
     times = take("<f8", nf)
-    maps: Dict[str, npt.NDArray[np.float32]] = {}
+    maps: Dict[str, Any] = {}
     for bit, (name, size) in enumerate(map_sizes):
         if mask >> bit & 1:
             values = take("<f4", size)

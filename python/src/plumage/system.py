@@ -117,6 +117,9 @@ class Validation:
     mean_pitch_deg: float
     probes: int
     buried_probes: int
+    tip_height_median: float
+    tip_height_p90: float
+    bristle_percent: float
 
 
 @dataclass(frozen=True)
@@ -140,23 +143,28 @@ class OrderingStats:
 
 @dataclass(frozen=True)
 class FeatherGeometry:
-    """Every feather as a triangle mesh.
+    """Every feather as a triangle mesh (plumage_system_feather_geometry).
 
-    positions, normals: (V, 3) float32; triangles: (T, 3) uint32 into the
+    positions, normals: (V, 3) float32 (unit normals facing away from the
+    skin); uvs: (V, 2) float32, u 0 at the root to 1 at the tip, v 0 to 1
+    across the vanes (0.5 on the shaft); triangles: (T, 3) uint32 into the
     whole vertex array; feather_index: (V,) uint32, the feather (row of
-    `ids`) each vertex belongs to; ids: (F,) uint64, the feathers' stable ids;
-    vertex_counts, triangle_counts: (F,) uint32; uvs: (V, 2) float32 or None
-    when the library gives none.
+    `ids`) each vertex belongs to; ids: (F,) uint64, the feathers' stable
+    ids; vertex_counts, triangle_counts: (F,) uint32; placed: (F,) bool,
+    False for a feather left out (all its vertices at its root). Feathers
+    come one after the other in the order of `System.feathers()`; all but
+    positions and normals stay the same from frame to frame.
     """
 
     positions: FloatArray
     normals: FloatArray
+    uvs: FloatArray
     triangles: UIntArray
     feather_index: UIntArray
     ids: npt.NDArray[np.uint64]
     vertex_counts: UIntArray
     triangle_counts: UIntArray
-    uvs: Optional[FloatArray]
+    placed: npt.NDArray[np.bool_]
 
 
 S = TypeVar("S")
@@ -165,11 +173,6 @@ S = TypeVar("S")
 def _from_struct(cls: Type[S], raw: ctypes.Structure) -> S:
     return cls(**{f.name: getattr(raw, f.name) for f in fields(cls)})  # type: ignore[arg-type]
 
-
-# A kite's corners in the 18-float layout of plumage_system_feather_triangles:
-# (root, tip, left), (root, right, tip). Kept: root, tip, left, right.
-_KITE_CORNERS = np.array([0, 1, 2, 4])
-_KITE_TRIANGLES = np.array([[0, 1, 2], [0, 3, 1]], dtype=np.uint32)
 
 # dtype of one PlumageFeather as numpy sees it (same bytes)
 FEATHER_DTYPE = np.dtype(
@@ -196,7 +199,7 @@ FEATHER_DTYPE = np.dtype(
 )
 
 CONFIG_FIELDS = tuple(
-    name for name, _ in _ffi.Config._fields_ if name not in ("struct_size", "progress", "progress_user_data", "flow_source_enabled")
+    f[0] for f in _ffi.Config._fields_ if f[0] not in ("struct_size", "progress", "progress_user_data", "flow_source_enabled")
 )
 
 
@@ -230,7 +233,7 @@ def _build_config(config: Dict[str, Any]) -> _ffi.Config:
             if value not in table:
                 raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{key} {value!r}: expected one of {', '.join(table)}")
             value = table[value]
-        field_type = dict(_ffi.Config._fields_)[key]
+        field_type = {f[0]: f[1] for f in _ffi.Config._fields_}[key]
         try:
             if isinstance(getattr(cfg, key), ctypes.Array):
                 xyz = [float(v) for v in value]
@@ -315,7 +318,7 @@ class System:
         _check(status, None, "plumage_system_create")
         self._handle = out.value
         self._config = cfg
-        self._vertex_count = n
+        self._vertex_count = int(n)
 
     @staticmethod
     def _progress_trampoline(progress: ProgressCallback) -> Callable[[Any, int, float], int]:
@@ -360,7 +363,7 @@ class System:
     def feather_count(self) -> int:
         n = ctypes.c_size_t()
         _check(lib.plumage_system_feather_count(self._h(), ctypes.byref(n)), self._handle, "plumage_system_feather_count")
-        return n.value
+        return int(n.value)
 
     def _frame_positions(self, positions: ArrayLike) -> FloatArray:
         return _float_array(positions, "positions", 3)
@@ -399,23 +402,47 @@ class System:
         return out.reshape(-1)[: n.value].reshape(-1, 6, 3)
 
     def feather_geometry(self) -> FeatherGeometry:
-        """Every feather as an indexed triangle mesh with normals and feather ids."""
-        # The one place that knows how the library hands out feather geometry:
-        # today two triangles (a kite) per feather from plumage_system_feather_triangles.
+        """Every feather as an indexed triangle mesh with normals, UVs and feather ids."""
+        h = self._h()
         ids = self.feathers()["id"].copy()
-        kites = self.feather_triangles()
-        f = kites.shape[0]
-        positions = np.ascontiguousarray(kites[:, _KITE_CORNERS, :].reshape(-1, 3))
-        triangles = (_KITE_TRIANGLES[None, :, :] + (4 * np.arange(f, dtype=np.uint32))[:, None, None]).reshape(-1, 3)
+        g = _ffi.FeatherGeometry()
+        lib.plumage_feather_geometry_init(ctypes.byref(g))
+        _check(lib.plumage_system_feather_geometry(h, ctypes.byref(g)), h, "plumage_system_feather_geometry")
+        nf, nv, nt = int(g.feather_count), int(g.vertex_count), int(g.triangle_count)
+        positions = np.empty((nv, 3), dtype=np.float32)
+        normals = np.empty((nv, 3), dtype=np.float32)
+        uvs = np.empty((nv, 2), dtype=np.float32)
+        triangles = np.empty((nt, 3), dtype=np.uint32)
+        feather_index = np.empty(nv, dtype=np.uint32)
+        vertex_counts = np.empty(nf, dtype=np.uint32)
+        triangle_counts = np.empty(nf, dtype=np.uint32)
+        placed = np.empty(nf, dtype=np.uint8)
+        u32 = ctypes.POINTER(ctypes.c_uint32)
+        for name, arr, ptr_type in (
+            ("positions", positions, ctypes.POINTER(ctypes.c_float)),
+            ("normals", normals, ctypes.POINTER(ctypes.c_float)),
+            ("uvs", uvs, ctypes.POINTER(ctypes.c_float)),
+            ("indices", triangles, u32),
+            ("vertex_feathers", feather_index, u32),
+            ("vertex_counts", vertex_counts, u32),
+            ("triangle_counts", triangle_counts, u32),
+            ("placed", placed, ctypes.POINTER(ctypes.c_uint8)),
+        ):
+            setattr(g, name, arr.ctypes.data_as(ptr_type))
+            setattr(g, name + "_capacity", arr.size)
+        _check(lib.plumage_system_feather_geometry(h, ctypes.byref(g)), h, "plumage_system_feather_geometry")
+        if (int(g.feather_count), int(g.vertex_count), int(g.triangle_count)) != (nf, nv, nt) or nf != len(ids):
+            raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, "the feather geometry changed between two reads")  # pragma: no cover
         return FeatherGeometry(
             positions=positions,
-            normals=vertex_normals(positions, triangles),
-            triangles=np.ascontiguousarray(triangles, dtype=np.uint32),
-            feather_index=np.repeat(np.arange(f, dtype=np.uint32), 4),
+            normals=normals,
+            uvs=uvs,
+            triangles=triangles,
+            feather_index=feather_index,
             ids=ids,
-            vertex_counts=np.full(f, 4, dtype=np.uint32),
-            triangle_counts=np.full(f, 2, dtype=np.uint32),
-            uvs=None,
+            vertex_counts=vertex_counts,
+            triangle_counts=triangle_counts,
+            placed=placed.astype(bool),
         )
 
     # -- figures ----------------------------------------------------------
@@ -482,4 +509,4 @@ def vertex_normals(positions: FloatArray, triangles: UIntArray) -> FloatArray:
 
 
 def version() -> str:
-    return lib.plumage_version().decode()
+    return str(lib.plumage_version().decode())

@@ -1,15 +1,17 @@
 """USD output (needs `usd-core`): the body and the feathers as UsdGeomMesh
-prims with time-sampled points and normals, a per-feather `id` primvar and,
-when the library gives them, `st` UVs.
+prims with time-sampled points and normals, `st` UVs and a per-feather `id`
+primvar.
 
 Layout of the stage:
 
     /Plumage           Xform, the default prim
     /Plumage/Body      the dressed mesh (the rest pose as default value)
-    /Plumage/Feathers  every feather: 4 vertices and 2 triangles each, in the
-                       rest pose's feather order; primvars `id` (int64, the
-                       library's 64-bit id reinterpreted as signed, uniform:
-                       one per triangle) and `featherIndex` (int, vertex)
+    /Plumage/Feathers  every feather as the library lays it out
+                       (plumage_system_feather_geometry), in the rest pose's
+                       feather order; primvars `st` (vertex: u along the
+                       shaft, v across the vanes), `id` (int64, the library's
+                       64-bit id reinterpreted as signed, uniform: one per
+                       triangle) and `featherIndex` (int, vertex)
 
 Time codes are clip seconds × fps, with timeCodesPerSecond = fps.
 """
@@ -17,7 +19,7 @@ Time codes are clip seconds × fps, with timeCodesPerSecond = fps.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional, Sequence, Union
+from typing import List, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -25,7 +27,7 @@ import numpy.typing as npt
 from .system import FeatherGeometry, System, vertex_normals
 
 try:
-    from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+    from pxr import Gf, Sdf, Usd, UsdGeom, Vt  # type: ignore[import-untyped]
 except ImportError as e:  # pragma: no cover - exercised only without usd-core
     raise ImportError("plumage.usd needs the usd-core package: pip install usd-core") from e
 
@@ -40,20 +42,23 @@ def _extent(points: np.ndarray) -> "Vt.Vec3fArray":
     return Vt.Vec3fArray([Gf.Vec3f(*map(float, points.min(axis=0))), Gf.Vec3f(*map(float, points.max(axis=0)))])
 
 
-def arrange_by_id(rest_ids: np.ndarray, geometry: FeatherGeometry, previous: np.ndarray) -> np.ndarray:
-    """The frame's feather vertices in the rest pose's feather order: a
-    feather absent from this frame keeps its previous points (as the C++
-    host's .glb does); one absent at rest is left out."""
-    out = previous.copy()
-    if len(rest_ids) == 0 or len(geometry.ids) == 0:
-        return out
-    order = np.argsort(rest_ids, kind="stable")
-    sorted_ids = rest_ids[order]
-    at = np.minimum(np.searchsorted(sorted_ids, geometry.ids), len(sorted_ids) - 1)
-    found = sorted_ids[at] == geometry.ids
-    per_feather = out.reshape(len(rest_ids), -1, 3)
-    per_feather[order[at[found]]] = geometry.positions.reshape(len(geometry.ids), -1, 3)[found]
-    return out
+def matching_vertices(rest: FeatherGeometry, frame: FeatherGeometry) -> "tuple[np.ndarray, np.ndarray]":
+    """(rest vertex rows, frame vertex rows) of the feathers found in both,
+    matched by id: how to put a frame's vertices in the rest pose's order."""
+    if len(rest.ids) == 0 or len(frame.ids) == 0:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    order = np.argsort(rest.ids, kind="stable")
+    sorted_ids = rest.ids[order]
+    at = np.minimum(np.searchsorted(sorted_ids, frame.ids), len(sorted_ids) - 1)
+    found = np.flatnonzero(sorted_ids[at] == frame.ids)
+    slots = order[at[found]]
+    counts = frame.vertex_counts[found].astype(np.intp)
+    if not np.array_equal(counts, rest.vertex_counts[slots]):
+        raise ValueError("a feather's vertex count changed from the rest pose")
+    rest_first = np.concatenate([[0], np.cumsum(rest.vertex_counts.astype(np.intp))[:-1]])
+    frame_first = np.concatenate([[0], np.cumsum(frame.vertex_counts.astype(np.intp))[:-1]])
+    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return np.repeat(rest_first[slots], counts) + within, np.repeat(frame_first[found], counts) + within
 
 
 class UsdWriter:
@@ -82,8 +87,8 @@ class UsdWriter:
         self.body_triangles = np.ascontiguousarray(body_triangles, dtype=np.uint32).reshape(-1, 3)
         self.body = self._mesh("/Plumage/Body", np.asarray(body_rest, np.float32).reshape(-1, 3), self.body_triangles)
 
+        self.rest = feathers_rest
         self.rest_ids = feathers_rest.ids.copy()
-        self.feather_triangles = feathers_rest.triangles
         self.feathers = self._mesh("/Plumage/Feathers", feathers_rest.positions, feathers_rest.triangles, feathers_rest.normals)
         self.feathers.GetDoubleSidedAttr().Set(True)
         pv = UsdGeom.PrimvarsAPI(self.feathers.GetPrim())
@@ -92,11 +97,11 @@ class UsdWriter:
         ids.Set(Vt.Int64Array.FromNumpy(self.rest_ids.view(np.int64)[per_triangle_feather]))
         index = pv.CreatePrimvar("featherIndex", Sdf.ValueTypeNames.IntArray, UsdGeom.Tokens.vertex)
         index.Set(Vt.IntArray.FromNumpy(feathers_rest.feather_index.astype(np.int32)))
-        if feathers_rest.uvs is not None:
-            st = pv.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
-            st.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(feathers_rest.uvs, dtype=np.float32)))
-        self._feather_points = np.asarray(feathers_rest.positions, np.float32).copy()
-        self.time_codes: list = []
+        st = pv.CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.vertex)
+        st.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(feathers_rest.uvs, dtype=np.float32)))
+        self._feather_points = feathers_rest.positions
+        self._feather_normals = feathers_rest.normals
+        self.time_codes: List[float] = []
 
     def _mesh(self, path: str, points: np.ndarray, triangles: np.ndarray, normals: Optional[np.ndarray] = None) -> "UsdGeom.Mesh":
         mesh = UsdGeom.Mesh.Define(self.stage, path)
@@ -116,13 +121,17 @@ class UsdWriter:
         self.body.GetPointsAttr().Set(_vec3(body), tc)
         self.body.GetNormalsAttr().Set(_vec3(vertex_normals(body, self.body_triangles)), tc)
         self.body.GetExtentAttr().Set(_extent(body), tc)
-        if np.array_equal(feathers.ids, self.rest_ids):
-            points = feathers.positions
+        if np.array_equal(feathers.ids, self.rest_ids) and np.array_equal(feathers.vertex_counts, self.rest.vertex_counts):
+            points, normals = feathers.positions, feathers.normals  # the usual case: the layout never changes
         else:
-            points = arrange_by_id(self.rest_ids, feathers, self._feather_points)
-        self._feather_points = np.asarray(points, np.float32)
+            # a feather absent from this frame keeps its previous pose (as the
+            # C++ host's .glb does); one absent at rest is left out
+            dest, src = matching_vertices(self.rest, feathers)
+            points, normals = self._feather_points.copy(), self._feather_normals.copy()
+            points[dest], normals[dest] = feathers.positions[src], feathers.normals[src]
+        self._feather_points, self._feather_normals = points, normals
         self.feathers.GetPointsAttr().Set(_vec3(points), tc)
-        self.feathers.GetNormalsAttr().Set(_vec3(vertex_normals(self._feather_points, self.feather_triangles)), tc)
+        self.feathers.GetNormalsAttr().Set(_vec3(normals), tc)
         self.feathers.GetExtentAttr().Set(_extent(self._feather_points), tc)
 
     def save(self) -> None:
@@ -137,8 +146,8 @@ def write_run(
     system: System,
     rest: np.ndarray,
     triangles: np.ndarray,
-    frames: Sequence[np.ndarray],
-    times: Sequence[float],
+    frames: Union[Sequence[np.ndarray], np.ndarray],
+    times: Union[Sequence[float], np.ndarray],
     fps: float,
 ) -> None:
     """Steps `system` through `frames` (at clip `times`) and writes the run."""
