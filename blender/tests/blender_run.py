@@ -79,6 +79,14 @@ cache = np.load(out_dir + "/cache.npz")
 result["cache_frames"] = cache["frames"].tolist()
 result["cache_shape"] = list(cache["positions"].shape)
 
+# playback from the cache: the mesh shows the baked frame, the system is not touched
+last_solved = run["frame"]
+scene.frame_set(2)
+shown = np.empty(3 * len(feathers_obj.data.vertices), dtype=np.float32)
+feathers_obj.data.vertices.foreach_get("co", shown)
+result["cache_playback_matches"] = bool(np.array_equal(shown, cache["positions"][1].ravel()))
+result["cache_playback_untouched"] = run["frame"] == last_solved == scene.frame_end  # no step, no evaluate
+
 # render frame 4 from the cache with Cycles on the CPU
 scene.frame_set(4)
 cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))

@@ -52,6 +52,7 @@ def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
     assert result["scrub_back_frame_index"] == 5 and result["scrub_back_valid"]  # a jump evaluates, it does not step
     assert result["cache_frames"] == [1, 2, 3, 4, 5, 6]
     assert result["cache_shape"][0] == 6 and result["cache_shape"][2] == 3
+    assert result["cache_playback_matches"] and result["cache_playback_untouched"]
     png = Path(result["rendered"])
     assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     keep = os.environ.get("PLUMAGE_BLENDER_RENDER")
