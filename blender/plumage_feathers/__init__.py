@@ -125,7 +125,14 @@ class PlumageSettings(bpy.types.PropertyGroup):
     spacing: FloatProperty(name="Spacing", default=0.05, min=1e-6, subtype="DISTANCE")
     feather_length: FloatProperty(name="Length", default=0.0, min=0.0, subtype="DISTANCE", description="0 = derived from the spacing")
     feather_width: FloatProperty(name="Width", default=0.0, min=0.0, subtype="DISTANCE", description="0 = derived from the spacing")
-    flow: EnumProperty(name="Flow", items=[("AXIS", "Object axis", ""), ("ATTRIBUTE", "Vertex attribute", "")])
+    flow: EnumProperty(
+        name="Flow",
+        items=[
+            ("AUTO", "From the mesh", "The library derives the flow from the mesh's principal axis"),
+            ("AXIS", "Object axis", "Feathers point along this axis of the object"),
+            ("ATTRIBUTE", "Vertex attribute", "A per-vertex direction attribute"),
+        ],
+    )
     flow_axis: EnumProperty(name="Axis", items=[(a, a, "") for a in ("X", "Y", "Z", "-X", "-Y", "-Z")], default="-Y")
     flow_attribute: StringProperty(name="Flow attribute", description="Vector attribute NAME or NAME:C")
     spacing_map: StringProperty(name="Spacing map", description="Attribute NAME or NAME:C (0 = bare skin)")
@@ -266,7 +273,8 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
         row.prop(props, "feather_length")
         row.prop(props, "feather_width")
         layout.prop(props, "flow")
-        layout.prop(props, "flow_axis" if props.flow == "AXIS" else "flow_attribute")
+        if props.flow != "AUTO":
+            layout.prop(props, "flow_axis" if props.flow == "AXIS" else "flow_attribute")
         layout.prop(props, "spacing_map")
         layout.prop(props, "length_map")
         layout.prop(props, "width_map")

@@ -45,6 +45,7 @@ scene.frame_set(1)
 props = body.plumage
 props.target_feathers = 800
 props.threads = 2
+props.flow = "AXIS"
 props.flow_axis = "-Z"
 bpy.context.view_layer.objects.active = body
 assert bpy.ops.plumage.dress() == {"FINISHED"}
