@@ -99,7 +99,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report", "--poses",
                                            "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
@@ -162,6 +162,8 @@ std::string usage_text() {
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
            "  --report FILE.json   write the machine-readable report\n"
+           "  --poses FILE         write the library's input (rest mesh, config, maps, every frame's positions)\n"
+           "                       for `python -m plumage dress` (format in gltf_host/pose_writer.h)\n"
            "  --version, --help\n"
            "exit codes: 0 success, 1 output not written, 2 usage error, 3 unreadable or unsupported input,\n"
            "            4 library error\n";
@@ -230,7 +232,8 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
-        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
+        else if (arg == "--poses") o.poses = value;
+        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
     for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map}) {

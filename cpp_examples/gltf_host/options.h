@@ -50,6 +50,7 @@ struct Options {
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;
     std::string report;
+    std::string poses;  // --poses FILE: the rest mesh, config, maps and frames handed to the library
     bool help = false;
     bool version = false;
 };
