@@ -134,9 +134,9 @@ const DRAPE_BISECTIONS: usize = 4;
 /// the root, each takes the lowest angle at which it is clear by the
 /// exact checks (the obstacles, their raised tops, and the body), coming
 /// down from above in steps so that it settles on what lies beneath it
-/// rather than passing through to a clear place below. Only the segments
-/// placed so far are checked: a later segment starts where the one before
-/// it ends and finds its own angle. The root segment may come down to the
+/// rather than passing through to a clear place below. Only the segment
+/// being placed is checked (those before it are placed and do not move; a
+/// later one starts where it ends and finds its own angle). The root segment may come down to the
 /// lowest pitch; every later one turns within the bend limit of the one
 /// before it, up or down. So an obstacle near the root no longer lifts
 /// the whole feather: past it, the feather bends down again.
@@ -153,7 +153,7 @@ fn drape(
     let mut hints = CheckHints::default();
     let segments = shape.segment_count();
     let mut clear = |pose: FeatherPose, segment: usize, scratch: &mut HeightField| {
-        prefix_check(frame, shape, pose, segment, boxes, body, scratch, &mut hints)
+        segment_check(frame, shape, pose, segment, boxes, body, scratch, &mut hints)
     };
     pose.pitch = descend(straight.pitch, params.min_pitch, |pitch| {
         let mut lowered = pose;
@@ -209,11 +209,12 @@ fn descend(high: f32, low: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f3
     }
 }
 
-/// The exact check of the segments up to `segment` (from the root) of a
-/// posed feather: their triangles meet no obstacle and no obstacle's
-/// raised top, and do not cross the body beyond the root socket.
+/// The exact check of segment `segment` (from the root) of a posed
+/// feather: its triangles meet no obstacle and no obstacle's raised top,
+/// and do not cross the body beyond the root socket. The drape checks each
+/// segment as it places it; the segments before it do not move then.
 #[allow(clippy::too_many_arguments)]
-fn prefix_check(
+fn segment_check(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
@@ -224,7 +225,7 @@ fn prefix_check(
     hints: &mut CheckHints,
 ) -> bool {
     let all = feather_triangles(frame, shape, pose);
-    let mine = FeatherBoxes::new(&segment_prefix(&all, shape, segment));
+    let mine = FeatherBoxes::new(&segment_triangles(&all, shape, segment));
     if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }
@@ -235,17 +236,19 @@ fn prefix_check(
     !meets_obstacle(&mine, obstacles, true, &mut hints.top)
 }
 
-/// The triangles of segments `0..=segment` of a segmented feather, from
-/// its triangles in the order of [`feather_triangles`] (per vane, the
-/// fans of its [`ShaftPlan`](crate::feather::ShaftPlan) from the root).
-fn segment_prefix(all: &[[Vec3; 3]], shape: &FeatherShape, segment: usize) -> FeatherTriangles {
+/// The triangles of segment `segment` of a segmented feather, from its
+/// triangles in the order of [`feather_triangles`] (per vane, the fans of
+/// its [`ShaftPlan`](crate::feather::ShaftPlan) from the root).
+fn segment_triangles(all: &[[Vec3; 3]], shape: &FeatherShape, segment: usize) -> FeatherTriangles {
     let plan = shape.shaft_plan();
     let per_vane = plan.triangles_per_vane();
+    let start = if segment == 0 { 0 } else { plan.triangles_per_vane_up_to(segment - 1) };
     let end = plan.triangles_per_vane_up_to(segment);
-    let mut prefix = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
-    prefix[..end].copy_from_slice(&all[..end]);
-    prefix[end..2 * end].copy_from_slice(&all[per_vane..per_vane + end]);
-    FeatherTriangles::from_slice(&prefix[..2 * end])
+    let n = end - start;
+    let mut part = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+    part[..n].copy_from_slice(&all[start..end]);
+    part[n..2 * n].copy_from_slice(&all[per_vane + start..per_vane + end]);
+    FeatherTriangles::from_slice(&part[..2 * n])
 }
 
 /// The straight feather's pose (all joints unbent): the three steps on the
