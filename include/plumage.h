@@ -291,6 +291,8 @@ typedef struct PlumageConfig {
   float theta_s;
   /**
    * Flow axis for the orientation field when the mesh gives no hints.
+   * (0, 0, 0), the default, derives it from the mesh: its principal
+   * axis, pointing to −Z (glTF models face +Z), else down (−Y), else +X.
    */
   float flow_axis[3];
   /**

@@ -70,6 +70,8 @@ pub struct PlumageConfig {
     /// its length.
     pub theta_s: f32,
     /// Flow axis for the orientation field when the mesh gives no hints.
+    /// (0, 0, 0), the default, derives it from the mesh: its principal
+    /// axis, pointing to −Z (glTF models face +Z), else down (−Y), else +X.
     pub flow_axis: [f32; 3],
     /// Non-zero: recompute neighbourhoods at the current pose every frame.
     pub recompute_neighbourhoods: u32,
