@@ -56,8 +56,10 @@ use std::time::Instant;
 /// the loop; in practice one or two passes suffice).
 const MAX_RETRY_PASSES: usize = 8;
 
-/// Path-pool slack before it is compacted.
-const PATH_POOL_SLACK: usize = 4096;
+/// Room, beyond twice the live paths and the path being stored, that a
+/// compaction leaves in the path pool, as a multiple of the pair count, so
+/// that compactions (each a pass over the pairs) stay rare.
+const PATH_POOL_ROOM_PER_PAIR: usize = 1;
 
 /// The edge on one pair.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -182,7 +184,10 @@ pub struct PriorityOrder {
     // The order: `order[rank[v]] == v`.
     pub(super) rank: Vec<u32>,
     pub(super) order: Vec<u32>,
-    // Suppressed pairs (sorted pair indices) and their blocking paths.
+    // Suppressed pairs (sorted pair indices) and their blocking paths. A
+    // pair's path is `path_pool[start..start + len]` with `(start, len) =
+    // blocking[pair]`; paths of pairs no longer suppressed are dead and are
+    // dropped by compaction when the pool is full (`make_room_for_path`).
     pub(super) suppressed: Vec<u32>,
     pub(super) touched: Vec<u32>,
     pub(super) blocking: Vec<(u32, u32)>,
@@ -709,8 +714,12 @@ impl PriorityOrder {
         best
     }
 
-    /// Stores `nodes` as the blocking path of pair `pid`.
+    /// Stores `first` then `second` as the blocking path of pair `pid`.
     fn record_blocking_path(&mut self, pid: u32, first: &[u32], second: &[u32]) {
+        let need = first.len() + second.len();
+        if self.path_pool.len() + need > self.path_pool.capacity() {
+            self.make_room_for_path(need);
+        }
         let start = self.path_pool.len() as u32;
         self.path_pool.extend_from_slice(first);
         self.path_pool.extend_from_slice(second);
@@ -834,33 +843,59 @@ impl PriorityOrder {
     /// Folds the pairs touched by the last operations into the sorted
     /// suppressed list and drops those that got their wanted edge.
     pub(super) fn refresh_suppressed(&mut self) {
-        self.suppressed.append(&mut self.touched);
-        self.suppressed.sort_unstable();
-        self.suppressed.dedup();
+        // Only pairs still suppressed join the list, once each, so its
+        // length (and capacity) follows the number of suppressed pairs, not
+        // how many pairs a call happened to touch.
         let (delta, state) = (&self.delta, &self.state);
-        self.suppressed.retain(|&p| Edge::wanted(delta[p as usize]) != state[p as usize]);
-        self.compact_paths_if_sparse();
+        let still_suppressed = |p: &u32| Edge::wanted(delta[*p as usize]) != state[*p as usize];
+        self.suppressed.retain(still_suppressed);
+        self.touched.retain(still_suppressed);
+        self.touched.sort_unstable();
+        self.touched.dedup();
+        let listed = &self.suppressed;
+        self.touched.retain(|p| listed.binary_search(p).is_err());
+        if !self.touched.is_empty() {
+            self.suppressed.extend_from_slice(&self.touched);
+            self.suppressed.sort_unstable();
+        }
+        self.touched.clear();
     }
 
-    /// Rewrites the path pool with only the suppressed pairs' paths once
-    /// dead paths dominate it, so it never grows with animation length.
-    fn compact_paths_if_sparse(&mut self) {
-        let live: usize = self.suppressed.iter().map(|&p| self.blocking[p as usize].1 as usize).sum();
-        if self.path_pool.len() <= 2 * live + PATH_POOL_SLACK {
-            return;
-        }
+    /// Called when the path pool cannot take `need` more entries without
+    /// growing: first drops the dead paths (those of pairs no longer
+    /// suppressed), moving the live ones to the front unchanged, and grows
+    /// the pool only if the live paths, the new one and some room still do
+    /// not fit. The pool's capacity so follows the live paths and the pair
+    /// count, however many paths the frames have recorded; a pool that only
+    /// appended would grow with the animation length. Compaction never
+    /// changes a path, so results do not depend on when it happens.
+    ///
+    /// A pair is live when its wanted edge differs from its edge, checked on
+    /// the pair states rather than the suppressed list, which lags within a
+    /// call: a pair that was refused or lost its edge earlier in this call
+    /// is already suppressed and keeps its path.
+    fn make_room_for_path(&mut self, need: usize) {
         self.path_pool_spare.clear();
         for pid in 0..self.blocking.len() {
             let (start, len) = self.blocking[pid];
-            if self.is_suppressed(pid as u32) {
-                let new_start = self.path_pool_spare.len() as u32;
-                self.path_pool_spare.extend_from_slice(&self.path_pool[start as usize..(start + len) as usize]);
-                self.blocking[pid] = (new_start, len);
-            } else {
-                self.blocking[pid] = (0, 0);
+            let path = self.path_pool.get(start as usize..(start + len) as usize).filter(|p| !p.is_empty());
+            match path {
+                Some(path) if self.is_suppressed(pid as u32) => {
+                    self.blocking[pid] = (self.path_pool_spare.len() as u32, len);
+                    self.path_pool_spare.extend_from_slice(path);
+                }
+                _ => self.blocking[pid] = (0, 0),
             }
         }
-        std::mem::swap(&mut self.path_pool, &mut self.path_pool_spare);
+        // Copied back rather than swapped: the pool keeps its capacity and
+        // the spare only ever holds the live paths.
+        self.path_pool.clear();
+        self.path_pool.extend_from_slice(&self.path_pool_spare);
+        let live = self.path_pool.len();
+        let room = 2 * live + need + PATH_POOL_ROOM_PER_PAIR * self.pairs.len();
+        if room > self.path_pool.capacity() {
+            self.path_pool.reserve_exact(room - live);
+        }
     }
 
     /// End of a public mutating call: suppressed list and sorted reports.
@@ -1035,6 +1070,35 @@ mod tests {
         assert_eq!(order.prior_in_pair(0, 2), Some(2));
         assert_eq!(order.prior_in_pair(1, 2), None);
         assert_eq!(order.count_violations(), 0);
+    }
+
+    #[test]
+    fn blocking_paths_do_not_pile_up_over_frames() {
+        // (0, 2) turns back and forth against the stronger path 0→1→2: on
+        // every other frame its reversal is refused and a new blocking path
+        // recorded, the previous one being dead by then.
+        let mut order = triangle(-3.0, -1.0, -2.0);
+        let mut capacity_at_100 = 0;
+        for k in 0..=10_000 {
+            let refused = k % 2 == 0;
+            let stats = frame(&mut order, &[(0, 2, if refused { 1.0 } else { -1.0 })]);
+            assert_eq!(stats.reversals_refused, usize::from(refused));
+            assert_eq!(stats.retried, 0, "the recorded path must hold (frame {k})");
+            assert_eq!(order.suppressed_count(), usize::from(refused));
+            if k == 100 {
+                capacity_at_100 = order.path_pool.capacity();
+            }
+        }
+        // One live path of 3 roots on 3 pairs: the pool holds it and a little
+        // room (dead paths fill the room until the next compaction), and it
+        // stopped growing long before frame 100.
+        assert!(order.path_pool.capacity() <= 16, "pool capacity {}", order.path_pool.capacity());
+        assert_eq!(order.path_pool.capacity(), capacity_at_100);
+        // The path kept through all those compactions still works: weakening
+        // 1→2 below (0, 2) lets the reversal through.
+        let stats = frame(&mut order, &[(1, 2, -0.5)]);
+        assert_eq!((stats.retried, stats.reversals_done), (1, 1));
+        assert_eq!(order.prior_in_pair(0, 2), Some(2));
     }
 
     #[test]

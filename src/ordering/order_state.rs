@@ -19,8 +19,8 @@
 //!   blocking path is read only while the pair is suppressed, and a pair
 //!   only becomes suppressed through a refusal or a cycle break that
 //!   records a new path for it, so only the suppressed pairs' paths are
-//!   stored; on load the pool holds just those (compaction, which the pool's
-//!   length triggers, moves paths without changing them).
+//!   stored; on load the pool holds just those (compaction, which a full
+//!   pool triggers, moves paths without changing them).
 //!
 //! # Layout
 //! node count (u64); order (u32 slice); pair count (u64) then `(lo, hi)`
@@ -341,6 +341,23 @@ mod tests {
                 let b = step(&mut restored, n, frame);
                 prop_assert_eq!(a, b);
                 prop_assert_eq!(blob_of(&order), blob_of(&restored));
+            }
+        }
+
+        /// When the path pool compacts (a full pool) changes nothing: an
+        /// order whose pool has room for every path ever recorded, so never
+        /// compacts, behaves exactly like one that compacts as it goes.
+        #[test]
+        fn path_pool_compaction_changes_no_result((n, pairs, deltas, frames) in arb_case()) {
+            let mut order = PriorityOrder::new();
+            order.build_static(n, &pairs, &deltas);
+            let mut roomy = order.clone();
+            roomy.path_pool.reserve(1 << 16);
+            for frame in &frames {
+                let a = step(&mut order, n, frame);
+                let b = step(&mut roomy, n, frame);
+                prop_assert_eq!(a, b);
+                prop_assert_eq!(blob_of(&order), blob_of(&roomy));
             }
         }
     }
