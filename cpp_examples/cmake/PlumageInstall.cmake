@@ -16,7 +16,7 @@ install(FILES "${PLUMAGE_LIBRARY}" DESTINATION "${CMAKE_INSTALL_LIBDIR}"
 install(FILES "${PLUMAGE_STAGE_DIR}/${PLUMAGE_SONAME}" "${PLUMAGE_STAGE_DIR}/libplumage.so"
   DESTINATION "${CMAKE_INSTALL_LIBDIR}")
 install(FILES "${PLUMAGE_STATIC_LIBRARY}" DESTINATION "${CMAKE_INSTALL_LIBDIR}")
-install(FILES "${PLUMAGE_ROOT}/include/plumage.h" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
+install(FILES "${PLUMAGE_ROOT}/include/plumage.h" "${PLUMAGE_ROOT}/include/plumage.hpp" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
 
 # What a static link of Rust's standard library needs (rustc --print native-static-libs on Linux).
 set(PLUMAGE_STATIC_DEPS gcc_s util rt pthread m dl)
