@@ -26,6 +26,8 @@
  *   - Separate systems share nothing and may be used from different threads
  *     at the same time. Each system runs its own worker pool
  *     (PlumageConfig.threads); the process-wide rayon pool is never used.
+ *     With threads = 1 no thread is started: every call runs on the thread
+ *     that makes it, and so does the progress callback.
  *   - plumage_version, plumage_abi_version, plumage_status_name and the init
  *     functions may be called from any thread at any time.
  */
@@ -186,8 +188,10 @@ typedef struct PlumageSystem PlumageSystem;
  * stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
  * leaves the system as it was before the call (a stopped create creates
  * nothing). It is called at least every few milliseconds while the library
- * works, possibly from one of the system's worker threads, never from two
- * threads at once. It must not call back into the same system.
+ * works, never from two threads at once: with `threads = 1` always on the
+ * thread that made the call (create, step or evaluate); with more threads
+ * on that thread or on one of the system's worker threads. It must not
+ * call back into the same system.
  */
 typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
@@ -211,7 +215,11 @@ typedef struct PlumageConfig {
    */
   uint64_t seed;
   /**
-   * Worker threads: 0 = all cores, 1 = inline on the calling thread.
+   * Worker threads: 0 = one per core, 1 = no worker thread: every call
+   * runs on the thread that makes it, progress callbacks included. With
+   * 2 or more the system starts its own workers at create, and the
+   * calling thread waits while they work. Results are byte-identical
+   * whatever the count.
    */
   uint32_t threads;
   /**

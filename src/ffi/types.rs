@@ -31,7 +31,11 @@ pub struct PlumageConfig {
     pub sampler: u32,
     /// Seed of every random choice: same input and seed, same bytes.
     pub seed: u64,
-    /// Worker threads: 0 = all cores, 1 = inline on the calling thread.
+    /// Worker threads: 0 = one per core, 1 = no worker thread: every call
+    /// runs on the thread that makes it, progress callbacks included. With
+    /// 2 or more the system starts its own workers at create, and the
+    /// calling thread waits while they work. Results are byte-identical
+    /// whatever the count.
     pub threads: u32,
     /// `PLUMAGE_MODE_*`.
     pub mode: u32,
@@ -100,8 +104,10 @@ pub struct PlumageConfig {
 /// stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
 /// leaves the system as it was before the call (a stopped create creates
 /// nothing). It is called at least every few milliseconds while the library
-/// works, possibly from one of the system's worker threads, never from two
-/// threads at once. It must not call back into the same system.
+/// works, never from two threads at once: with `threads = 1` always on the
+/// thread that made the call (create, step or evaluate); with more threads
+/// on that thread or on one of the system's worker threads. It must not
+/// call back into the same system.
 pub type PlumageProgressFn = Option<unsafe extern "C" fn(user_data: *mut c_void, phase: u32, fraction: f32) -> i32>;
 
 /// Progress phase: checking and welding the mesh, building the surface.
