@@ -256,12 +256,16 @@ public:
         return out;
     }
 
-    PlumageSamplingStats sampling_stats() const { return fill<PlumageSamplingStats>(plumage_system_sampling_stats); }
-    PlumageOrderingStats ordering_stats() const { return fill<PlumageOrderingStats>(plumage_system_ordering_stats); }
+    PlumageSamplingStats sampling_stats() const {
+        return fill(plumage_sampling_stats_init, plumage_system_sampling_stats);
+    }
+    PlumageOrderingStats ordering_stats() const {
+        return fill(plumage_ordering_stats_init, plumage_system_ordering_stats);
+    }
     /// What the last create, step or evaluate did.
-    PlumageFrameStats frame_stats() const { return fill<PlumageFrameStats>(plumage_system_frame_stats); }
+    PlumageFrameStats frame_stats() const { return fill(plumage_frame_stats_init, plumage_system_frame_stats); }
     /// plumage_system_validate: the exact checks on the current feathers.
-    PlumageValidation validate() const { return fill<PlumageValidation>(plumage_system_validate); }
+    PlumageValidation validate() const { return fill(plumage_validation_init, plumage_system_validate); }
 
     /// plumage_system_save_state: the current frame as a blob.
     std::vector<uint8_t> save_state() const {
@@ -278,11 +282,11 @@ public:
     void load_state(const std::vector<uint8_t>& blob) { load_state(blob.data(), blob.size()); }
 
 private:
-    /// A struct_size-led figures struct filled by `query`.
+    /// A figures struct set up by `init` and filled by `query`.
     template <class T>
-    T fill(uint32_t (*query)(const PlumageSystem*, T*)) const {
-        T out{};
-        out.struct_size = sizeof out;
+    T fill(void (*init)(T*), uint32_t (*query)(const PlumageSystem*, T*)) const {
+        T out;
+        init(&out);
         detail::check(query(sys_, &out), sys_);
         return out;
     }

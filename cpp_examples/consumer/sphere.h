@@ -13,7 +13,7 @@
 
 /* Unit sphere around the origin, y up, triangles facing outwards.
  * `xyz` holds 3 * SPHERE_VERTICES floats, `tri` 3 * SPHERE_TRIANGLES indices. */
-static void sphere_fill(float* xyz, uint32_t* tri) {
+static inline void sphere_fill(float* xyz, uint32_t* tri) {
     const double pi = 3.14159265358979323846;
     const uint32_t north = 0, south = SPHERE_VERTICES - 1;
     size_t v = 0, t = 0;
@@ -43,7 +43,7 @@ static void sphere_fill(float* xyz, uint32_t* tri) {
 }
 
 /* The sphere squashed along y and bulged in x: a frame's deformed positions. */
-static void sphere_squash(const float* rest, float* out, float amount) {
+static inline void sphere_squash(const float* rest, float* out, float amount) {
     size_t k;
     for (k = 0; k < SPHERE_VERTICES; ++k) {
         out[3 * k + 0] = rest[3 * k + 0] * (1.0f + 0.5f * amount);

@@ -5,7 +5,7 @@
 #include "plumage.h"
 
 #include "check.h"
-#include "sphere.h"
+#include "sphere_mesh.h"
 
 #include <cstring>
 #include <dirent.h>
@@ -46,21 +46,16 @@ int32_t record(void* user, uint32_t, float) {
 // Creates, steps twice, evaluates and validates with `threads`; returns the
 // feather triangles after each call.
 std::vector<std::vector<float>> run(uint32_t threads, Seen& seen) {
-    std::vector<float> rest(3 * SPHERE_VERTICES), frame(3 * SPHERE_VERTICES);
-    std::vector<uint32_t> tri(3 * SPHERE_TRIANGLES);
-    sphere_fill(rest.data(), tri.data());
+    const SphereMesh sphere;
+    const std::vector<float>& rest = sphere.rest;
+    std::vector<float> frame(3 * SPHERE_VERTICES);
     PlumageConfig cfg;
     plumage_config_init(&cfg);
     cfg.threads = threads;
     cfg.target_feathers = 300;
     cfg.progress = record;
     cfg.progress_user_data = &seen;
-    PlumageMeshDesc mesh;
-    plumage_mesh_desc_init(&mesh);
-    mesh.positions = rest.data();
-    mesh.vertex_count = SPHERE_VERTICES;
-    mesh.indices = tri.data();
-    mesh.triangle_count = SPHERE_TRIANGLES;
+    const PlumageMeshDesc mesh = sphere.desc();
 
     std::vector<std::vector<float>> out;
     PlumageSystem* sys = nullptr;

@@ -431,8 +431,9 @@ impl From<&crate::stats::FeatherRecord> for PlumageFeather {
     }
 }
 
-/// Sampling quality figures (`plumage_system_sampling_stats`). Set
-/// `struct_size = sizeof(PlumageSamplingStats)` before the call.
+/// Sampling quality figures (`plumage_system_sampling_stats`). Fill
+/// with `plumage_sampling_stats_init` (or set `struct_size = sizeof(PlumageSamplingStats)`)
+/// before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageSamplingStats {
@@ -452,8 +453,9 @@ pub struct PlumageSamplingStats {
     pub seconds: f64,
 }
 
-/// Static ordering figures (`plumage_system_ordering_stats`). Set
-/// `struct_size = sizeof(PlumageOrderingStats)` before the call.
+/// Static ordering figures (`plumage_system_ordering_stats`). Fill
+/// with `plumage_ordering_stats_init` (or set `struct_size = sizeof(PlumageOrderingStats)`)
+/// before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageOrderingStats {
@@ -474,7 +476,8 @@ pub struct PlumageOrderingStats {
 }
 
 /// What the last create, step or evaluate did (`plumage_system_frame_stats`).
-/// Set `struct_size = sizeof(PlumageFrameStats)` before the call.
+/// Fill with `plumage_frame_stats_init` (or set `struct_size =
+/// sizeof(PlumageFrameStats)`) before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageFrameStats {
@@ -533,7 +536,8 @@ pub struct PlumageFrameStats {
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
-/// Set `struct_size = sizeof(PlumageValidation)` before the call.
+/// Fill with `plumage_validation_init` (or set `struct_size =
+/// sizeof(PlumageValidation)`) before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageValidation {
