@@ -23,11 +23,13 @@
  *   - Functions taking `const PlumageSystem *` only read and may run
  *     concurrently with each other on the same system.
  *   - Functions taking `PlumageSystem *` need exclusive access to it.
- *   - Separate systems share nothing and may be used from different threads
- *     at the same time. Each system runs its own worker pool
- *     (PlumageConfig.threads); the process-wide rayon pool is never used.
- *     With threads = 1 no thread is started: every call runs on the thread
- *     that makes it, and so does the progress callback.
+ *   - Separate systems share no state and may be used from different
+ *     threads at the same time. Workers (PlumageConfig.threads): with
+ *     threads = 1 no thread is started, every call runs on the thread that
+ *     makes it, and so does the progress callback; systems with threads = 0
+ *     share one pool of a worker per core (started with the first such
+ *     system, ended with the last); threads = N >= 2 gives a system its own
+ *     N workers. The process-wide rayon pool is never used.
  *   - plumage_version, plumage_abi_version, plumage_status_name and the init
  *     functions may be called from any thread at any time.
  */
@@ -215,11 +217,11 @@ typedef struct PlumageConfig {
    */
   uint64_t seed;
   /**
-   * Worker threads: 0 = one per core, 1 = no worker thread: every call
-   * runs on the thread that makes it, progress callbacks included. With
-   * 2 or more the system starts its own workers at create, and the
-   * calling thread waits while they work. Results are byte-identical
-   * whatever the count.
+   * Worker threads: 1 = no worker thread: every call runs on the thread
+   * that makes it, progress callbacks included; 0 = one worker per core,
+   * in a pool shared by every system made with 0; N ≥ 2 = the system's
+   * own N workers, started at create. With workers, the calling thread
+   * waits while they work. Results are byte-identical whatever the count.
    */
   uint32_t threads;
   /**

@@ -1,5 +1,10 @@
-//! Each system's own worker pool. The process-wide rayon pool is never used:
+//! The systems' worker pools. The process-wide rayon pool is never used:
 //! every parallel algorithm runs inside [`WorkerPool::install`].
+//!
+//! `threads = 0` (all cores) gives every such system the same pool, started
+//! with the first of them and ended with the last, so several systems in one
+//! process do not each start a thread per core. `threads = N ≥ 2` gives the
+//! system a pool of its own.
 //!
 //! With one thread no worker is started: each call runs on the thread that
 //! made it (progress callbacks included). rayon has no "run here" mode, so
@@ -10,9 +15,9 @@
 
 use crate::error::{Error, ErrorKind, Result};
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock, Weak};
 
-/// A private rayon pool sized from `Config::threads` (0 = all cores), or
+/// A rayon pool sized from `Config::threads` (0 = all cores, shared), or
 /// the calling thread alone (1).
 #[derive(Clone, Debug)]
 pub struct WorkerPool {
@@ -27,19 +32,24 @@ enum Kind {
 }
 
 impl WorkerPool {
-    /// A pool of `threads` workers (0 = one per available core). With 1,
-    /// no thread is started and work runs on the caller's thread.
+    /// A pool of `threads` workers; 0 = one per available core, shared with
+    /// every other live system made with 0. With 1, no thread is started
+    /// and work runs on the caller's thread.
     pub fn new(threads: usize) -> Result<Self> {
-        if threads == 1 {
-            return Ok(Self { kind: Kind::Inline(Arc::default()) });
+        match threads {
+            0 => {
+                static SHARED: Mutex<Weak<rayon::ThreadPool>> = Mutex::new(Weak::new());
+                let mut shared = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+                if let Some(pool) = shared.upgrade() {
+                    return Ok(Self { kind: Kind::Pool(pool) });
+                }
+                let pool = Arc::new(build_pool(std::thread::available_parallelism().map_or(1, |n| n.get()))?);
+                *shared = Arc::downgrade(&pool);
+                Ok(Self { kind: Kind::Pool(pool) })
+            }
+            1 => Ok(Self { kind: Kind::Inline(Arc::default()) }),
+            n => Ok(Self { kind: Kind::Pool(Arc::new(build_pool(n)?)) }),
         }
-        let n = if threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { threads };
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .thread_name(|i| format!("plumage-{i}"))
-            .build()
-            .map_err(|e| Error::new(ErrorKind::InvalidArgument, format!("cannot start {n} worker threads: {e}")))?;
-        Ok(Self { kind: Kind::Pool(Arc::new(pool)) })
     }
 
     /// Runs `f` with this pool as the current rayon pool.
@@ -55,7 +65,7 @@ impl WorkerPool {
                 // The caller is a worker of a larger rayon pool (a Rust
                 // host's): its thread cannot take a second worker's role,
                 // so this system starts its one worker after all.
-                Some(_) => fallback.get_or_init(|| one_worker_pool().expect("cannot start a worker thread")).install(f),
+                Some(_) => fallback.get_or_init(|| build_pool(1).expect("cannot start a worker thread")).install(f),
             },
         }
     }
@@ -69,8 +79,12 @@ impl WorkerPool {
     }
 }
 
-fn one_worker_pool() -> std::result::Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
-    rayon::ThreadPoolBuilder::new().num_threads(1).thread_name(|_| "plumage-0".into()).build()
+fn build_pool(n: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .thread_name(|i| format!("plumage-{i}"))
+        .build()
+        .map_err(|e| Error::new(ErrorKind::InvalidArgument, format!("cannot start {n} worker threads: {e}")))
 }
 
 /// Runs `f` on the calling thread, which must not be a rayon worker, as the
@@ -143,6 +157,19 @@ mod tests {
         let msg = caught.unwrap_err().downcast::<String>().map(|s| *s).unwrap_or_default();
         assert!(msg.contains("boom at 57"), "{msg}");
         assert_eq!(pool.install(|| 7), 7, "the pool still works");
+    }
+
+    #[test]
+    fn all_cores_is_one_pool_for_every_live_system() {
+        let a = WorkerPool::new(0).unwrap();
+        let b = WorkerPool::new(0).unwrap();
+        let (Kind::Pool(pa), Kind::Pool(pb)) = (&a.kind, &b.kind) else { panic!("0 threads is a pool") };
+        assert!(Arc::ptr_eq(pa, pb), "two systems with 0 threads share the pool");
+        assert_eq!(a.threads(), std::thread::available_parallelism().map_or(1, |n| n.get()));
+        let c = WorkerPool::new(2).unwrap();
+        let Kind::Pool(pc) = &c.kind else { panic!("2 threads is a pool") };
+        assert!(!Arc::ptr_eq(pa, pc), "an explicit count gets its own pool");
+        assert_eq!(c.threads(), 2);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 // Threads that fit a host: with PlumageConfig.threads = 1 no worker thread
 // is started and every progress callback arrives on the calling thread,
 // through create, step, evaluate and validate; with 2 threads the results
-// are byte-identical. Threads are counted in /proc/self/task (Linux).
+// are byte-identical; with threads = 0 all systems share one pool. Threads
+// are counted in /proc/self/task (Linux).
 #include "plumage.h"
 
 #include "check.h"
@@ -108,5 +109,27 @@ int main() {
     CHECK(two.calls > 0);
     CHECK(parallel == serial);  // byte-identical at any thread count
     CHECK(serial.size() == 4 && !serial[0].empty());  // create, two steps, evaluate
+
+    // threads = 0: every such system shares one pool of all cores, so a
+    // second one starts no thread.
+    if (before > 0) {
+        const SphereMesh sphere;
+        const PlumageMeshDesc mesh = sphere.desc();
+        PlumageConfig cfg;
+        plumage_config_init(&cfg);
+        cfg.threads = 0;
+        cfg.target_feathers = 100;
+        PlumageSystem* a = nullptr;
+        PlumageSystem* b = nullptr;
+        CHECK(plumage_system_create(&cfg, &mesh, &a) == PLUMAGE_STATUS_OK);
+        const int with_one = thread_count();
+        CHECK(plumage_system_create(&cfg, &mesh, &b) == PLUMAGE_STATUS_OK);
+        const int with_two = thread_count();
+        std::printf("threads = 0: %d threads with one system, %d with two (%d before)\n", with_one, with_two, before);
+        CHECK(with_one > before);
+        CHECK(with_two == with_one);
+        plumage_system_destroy(a);
+        plumage_system_destroy(b);
+    }
     return plumage_check::finish("threads_test");
 }

@@ -31,11 +31,11 @@ pub struct PlumageConfig {
     pub sampler: u32,
     /// Seed of every random choice: same input and seed, same bytes.
     pub seed: u64,
-    /// Worker threads: 0 = one per core, 1 = no worker thread: every call
-    /// runs on the thread that makes it, progress callbacks included. With
-    /// 2 or more the system starts its own workers at create, and the
-    /// calling thread waits while they work. Results are byte-identical
-    /// whatever the count.
+    /// Worker threads: 1 = no worker thread: every call runs on the thread
+    /// that makes it, progress callbacks included; 0 = one worker per core,
+    /// in a pool shared by every system made with 0; N ≥ 2 = the system's
+    /// own N workers, started at create. With workers, the calling thread
+    /// waits while they work. Results are byte-identical whatever the count.
     pub threads: u32,
     /// `PLUMAGE_MODE_*`.
     pub mode: u32,
