@@ -179,6 +179,11 @@
 #define PLUMAGE_PHASE_ADJUSTING 3
 
 /**
+ * A tip farther than this off the skin, in feather lengths, is a bristle.
+ */
+#define BRISTLE_TIP_HEIGHT 0.5
+
+/**
  * An opaque feathering system. Create with `plumage_system_create`, free
  * with `plumage_system_destroy`.
  */
@@ -296,6 +301,8 @@ typedef struct PlumageConfig {
   float theta_s;
   /**
    * Flow axis for the orientation field when the mesh gives no hints.
+   * (0, 0, 0), the default, derives it from the mesh: its principal
+   * axis, pointing to −Z (glTF models face +Z), else down (−Y), else +X.
    */
   float flow_axis[3];
   /**
@@ -593,6 +600,20 @@ typedef struct PlumageValidation {
    * inside the body.
    */
   uint64_t buried_probes;
+  /**
+   * Median distance from a placed feather's tip to the body surface, in
+   * feather lengths (appended). A coat that lies down keeps it small.
+   */
+  double tip_height_median;
+  /**
+   * 90th percentile of the same, in feather lengths.
+   */
+  double tip_height_p90;
+  /**
+   * Percentage of placed feathers whose tip stands more than half a
+   * feather length off the skin (bristles).
+   */
+  double bristle_percent;
 } PlumageValidation;
 
 /**

@@ -86,7 +86,9 @@ pub struct Config {
     /// exact checks).
     pub drift_tolerance: f32,
     /// Flow axis used to derive the orientation field when the mesh gives no
-    /// hints and `flow_source` is unset.
+    /// hints and `flow_source` is unset. Zero (the default) derives it from
+    /// the mesh: its principal axis, pointing to −Z (glTF models face +Z),
+    /// else down (−Y), else +X.
     pub flow_axis: Vec3,
     /// Where the derived orientation field starts, when set (and the mesh
     /// gives no hints): feathers then point away from the mesh vertex
@@ -133,7 +135,7 @@ impl Default for Config {
             collision_allowance: 0.0,
             theta_s: 0.05,
             drift_tolerance: 0.3,
-            flow_axis: Vec3::X,
+            flow_axis: Vec3::ZERO,
             flow_source: None,
             recompute_neighbourhoods: true,
             curvature_min_scale: 0.4,
@@ -189,8 +191,11 @@ impl Config {
         if self.target_feathers > 10_000_000 {
             return bad(format!("config.target_feathers must be at most 10000000 (got {})", self.target_feathers));
         }
-        if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
-            return bad(format!("config.flow_axis must be finite and non-zero (got {:?})", self.flow_axis));
+        if !self.flow_axis.is_finite() || (self.flow_axis != Vec3::ZERO && self.flow_axis.length_squared() < 1e-12) {
+            return bad(format!(
+                "config.flow_axis must be finite and zero (derive it) or not tiny (got {:?})",
+                self.flow_axis
+            ));
         }
         if !(self.curvature_min_scale > 0.0 && self.curvature_min_scale <= 1.0) {
             return bad(format!("config.curvature_min_scale must be in (0, 1] (got {})", self.curvature_min_scale));

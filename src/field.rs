@@ -71,7 +71,7 @@ impl Fields {
                 dirs.into_iter().map(Option::unwrap).collect()
             }
             None => {
-                let axis = config.flow_axis;
+                let axis = if config.flow_axis == Vec3::ZERO { principal_flow_axis(mesh) } else { config.flow_axis };
                 if !axis.is_finite() || axis.length_squared() == 0.0 {
                     return Err(Error::new(ErrorKind::InvalidArgument, "config.flow_axis must be finite and non-zero"));
                 }
@@ -249,6 +249,44 @@ fn curvature_spacing(mesh: &WeldedMesh, surface: &Surface, normals: &[Vec3], len
 /// nearest `source` grows fastest (a least-squares gradient over the
 /// vertex's edges; distances along mesh edges, by Dijkstra). Vertices the
 /// source cannot reach (another component) get `axis`.
+/// The flow axis of a mesh given none: the principal axis of its surface
+/// (the largest eigenvector of the area-weighted covariance of its
+/// triangles' centroids), the long axis of a body, a limb or a wing,
+/// signed by glTF's conventions (models face +Z, +Y is up): towards −Z,
+/// so that feathers run from the front to the back; an axis across Z
+/// points down (−Y), and one along X points to +X. Deterministic: sums in
+/// triangle order, a fixed number of power iterations from a fixed start.
+fn principal_flow_axis(mesh: &WeldedMesh) -> Vec3 {
+    let corners = |t: &[u32; 3]| t.map(|v| mesh.positions[v as usize].as_dvec3());
+    let area = |[a, b, c]: [glam::DVec3; 3]| 0.5 * (b - a).cross(c - a).length();
+    let (mut total, mut mean) = (0.0f64, glam::DVec3::ZERO);
+    for t in &mesh.triangles {
+        let c = corners(t);
+        total += area(c);
+        mean += area(c) * (c[0] + c[1] + c[2]) / 3.0;
+    }
+    if !(total > 0.0) {
+        return Vec3::X;
+    }
+    mean /= total;
+    let mut cov = glam::DMat3::ZERO;
+    for t in &mesh.triangles {
+        let c = corners(t);
+        let d = (c[0] + c[1] + c[2]) / 3.0 - mean;
+        cov += glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z) * area(c);
+    }
+    let mut axis = glam::DVec3::new(0.3, 0.5, 0.8).normalize();
+    for _ in 0..64 {
+        match (cov * axis).try_normalize() {
+            Some(next) => axis = next,
+            None => return Vec3::X,
+        }
+    }
+    let preferred = [glam::DVec3::NEG_Z, glam::DVec3::NEG_Y, glam::DVec3::X];
+    let sign = preferred.iter().map(|p| axis.dot(*p)).find(|d| d.abs() > 0.1).unwrap_or(1.0).signum();
+    (axis * sign).as_vec3()
+}
+
 fn flow_from_source(mesh: &WeldedMesh, surface: &Surface, source: Vec3, axis: Vec3) -> Vec<Vec3> {
     use petgraph::graph::{NodeIndex, UnGraph};
     let p = &mesh.positions;
@@ -359,6 +397,31 @@ mod tests {
     fn plate() -> WeldedMesh {
         let pos = [0., 0., 0., 1., 0., 0., 1., 1., 0., 0., 1., 0.];
         weld(&MeshInput::new(&pos, &[0, 1, 2, 0, 2, 3])).unwrap()
+    }
+
+    fn weld_of(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> WeldedMesh {
+        let pos: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
+        let idx: Vec<u32> = triangles.iter().flatten().copied().collect();
+        weld(&MeshInput::new(&pos, &idx)).unwrap()
+    }
+
+    #[test]
+    fn a_mesh_given_no_axis_flows_along_its_long_axis_towards_its_back() {
+        // A box 10 long in z, 2 across: the axis is ±Z, signed towards −Z.
+        let mut positions = Vec::new();
+        for &z in &[-5.0f32, 5.0] {
+            for &(x, y) in &[(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                positions.push(Vec3::new(x, y, z));
+            }
+        }
+        let quads = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [1, 5, 6, 2], [2, 6, 7, 3], [3, 7, 4, 0]];
+        let triangles: Vec<[u32; 3]> = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+        let mesh = weld_of(positions.clone(), triangles.clone());
+        let axis = principal_flow_axis(&mesh);
+        assert!((axis - Vec3::NEG_Z).length() < 1e-4, "{axis:?}");
+        // Turned to lie along y: points down.
+        let turned = weld_of(positions.iter().map(|p| Vec3::new(p.x, p.z, p.y)).collect(), triangles);
+        assert!((principal_flow_axis(&turned) - Vec3::NEG_Y).length() < 1e-4);
     }
 
     #[test]

@@ -110,6 +110,12 @@ pub struct ValidationReport {
     pub buried_probes: usize,
     /// Mean pitch in degrees.
     pub mean_pitch_deg: f64,
+    /// Median distance from a placed feather's tip to the body, in feather lengths.
+    pub tip_height_median: f64,
+    /// 90th percentile of the same.
+    pub tip_height_p90: f64,
+    /// Percentage of placed feathers whose tip stands more than half a length off the skin.
+    pub bristle_percent: f64,
 }
 
 /// One feather as the host sees it.

@@ -231,6 +231,9 @@ impl System {
             probes: v.probes,
             buried_probes: v.buried_probes,
             mean_pitch_deg: v.mean_pitch_deg,
+            tip_height_median: v.tip_heights.median,
+            tip_height_p90: v.tip_heights.p90,
+            bristle_percent: v.tip_heights.bristle_percent,
         })
     }
 

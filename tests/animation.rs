@@ -7,7 +7,7 @@ use common::shapes::{Shape, grid};
 use plumage::{Config, MeshInput, Mode, System};
 
 fn plate_config(target: usize) -> Config {
-    Config { target_feathers: target, threads: 2, seed: 11, ..Config::default() }
+    Config { target_feathers: target, threads: 2, seed: 11, flow_axis: glam::Vec3::X, ..Config::default() }
 }
 
 fn create(shape: &Shape, config: &Config) -> System {

@@ -426,3 +426,25 @@ fn feather_geometry_copy_out() {
     assert_eq!(unsafe { plumage_system_feather_geometry(null(), &mut g) }, PLUMAGE_STATUS_NULL_POINTER);
     unsafe { plumage_system_destroy(sys) };
 }
+
+/// Validation: the coat figures appended to `PlumageValidation`, and an
+/// older, shorter struct (up to `mean_pitch_deg`) filled up to its size.
+#[test]
+fn validation_reports_tip_heights_and_fills_older_structs() {
+    let (pos, idx) = grid_soup();
+    let sys = create(&pos, &idx);
+    let mut v =
+        PlumageValidation { struct_size: std::mem::size_of::<PlumageValidation>() as u32, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut v) }, PLUMAGE_STATUS_OK);
+    assert!(v.tip_height_median >= 0.0 && v.tip_height_median <= v.tip_height_p90 && v.tip_height_p90 <= 1.0);
+    assert!((0.0..=100.0).contains(&v.bristle_percent));
+    let old = std::mem::offset_of!(PlumageValidation, probes);
+    let mut short = PlumageValidation { struct_size: old as u32, tip_height_p90: -3.0, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut short) }, PLUMAGE_STATUS_OK);
+    assert_eq!(short.struct_size as usize, old);
+    assert_eq!(short.coverage, v.coverage);
+    assert_eq!(short.tip_height_p90, -3.0, "bytes past struct_size are not written");
+    let mut tiny = PlumageValidation { struct_size: 8, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut tiny) }, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
+    unsafe { plumage_system_destroy(sys) };
+}

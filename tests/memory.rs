@@ -41,7 +41,7 @@ static ALLOCATOR: Counting = Counting;
 fn the_live_heap_does_not_grow_with_the_number_of_frames() {
     let plate = grid(6.0, 6.0, 24, 24, 0.0, true);
     for mode in [Mode::Incremental, Mode::Legacy, Mode::Rebuild] {
-        let cfg = Config { target_feathers: 300, threads: 1, mode, ..Config::default() };
+        let cfg = Config { target_feathers: 300, threads: 1, mode, flow_axis: glam::Vec3::X, ..Config::default() };
         let mut sys = System::new(&cfg, &MeshInput::new(&plate.positions, &plate.indices)).unwrap();
         let frame = |k: usize| -> Vec<f32> {
             let t = k as f32 * 0.05;

@@ -2,6 +2,7 @@
 // pose at any clip time, in the same vertex numbering.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -29,6 +30,8 @@ public:
     virtual std::optional<ClipInfo> clip() const = 0;
     // xyz per vertex at clip time `seconds`.
     virtual void pose_at(double seconds, std::vector<float>& xyz) const = 0;
+    // The direction the model faces at rest: +Z by glTF's convention.
+    virtual std::array<float, 3> facing() const { return {0.0f, 0.0f, 1.0f}; }
 
     size_t vertex_count() const { return rest_positions().size() / 3; }
     size_t triangle_count() const { return triangles().size() / 3; }

@@ -100,6 +100,24 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
     return j;
 }
 
+// With no flow given (--flow, --flow-source or --flow-map), feathers flow
+// from the front of the model to its back: the source is the rest vertex
+// farthest along the way the model faces (+Z for glTF; the lowest index
+// among equals), and the library's flow away from it along the surface
+// runs down the body, the limbs and the tail.
+void default_flow_from_front(const Options& opt, const AnimatedMesh& subject, PlumageConfig& cfg) {
+    const std::vector<float>& rest = subject.rest_positions();
+    if (opt.flow || opt.flow_source || !opt.flow_map.attribute.empty() || rest.empty()) return;
+    const std::array<float, 3> f = subject.facing();
+    const auto ahead = [&](size_t v) { return rest[3 * v] * f[0] + rest[3 * v + 1] * f[1] + rest[3 * v + 2] * f[2]; };
+    size_t front = 0;
+    for (size_t v = 1; v < rest.size() / 3; ++v) {
+        if (ahead(v) > ahead(front)) front = v;
+    }
+    cfg.flow_source_enabled = 1;
+    std::copy(rest.begin() + static_cast<std::ptrdiff_t>(3 * front), rest.begin() + static_cast<std::ptrdiff_t>(3 * front + 3), cfg.flow_source);
+}
+
 bool validate_frame(ValidateWhen when, size_t k, size_t n) { return when == ValidateWhen::Every || (when == ValidateWhen::Last && k + 1 == n); }
 
 // One run of the host: the rest pose, then every frame, then the outputs.
@@ -116,6 +134,7 @@ public:
 
     void create_rest_pose() {
         PlumageConfig cfg = make_config(opt_);
+        default_flow_from_front(opt_, *subject_, cfg);
         cfg.progress = &ProgressLine::library_callback;
         cfg.progress_user_data = &progress_;
         report_.set_subject(opt_.input.empty() ? "builtin:procedural_body" : opt_.input, subject_->mesh_name(), subject_->vertex_count(),

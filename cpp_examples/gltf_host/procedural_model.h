@@ -20,6 +20,8 @@ public:
     const std::vector<uint32_t>& triangles() const override { return indices_; }
     std::optional<ClipInfo> clip() const override { return ClipInfo{"swim", 0, 0.0, kDuration}; }
     void pose_at(double seconds, std::vector<float>& xyz) const override;
+    // The head is at x = 0 and the body runs along +x to the tail.
+    std::array<float, 3> facing() const override { return {-1.0f, 0.0f, 0.0f}; }
 
     static constexpr double kDuration = 2.0;
     static constexpr int kRings = 96, kSegments = 32;  // the default resolution

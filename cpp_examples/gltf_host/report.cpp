@@ -28,6 +28,9 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, mean_pitch_deg)) put(j, "mean_pitch_deg", v.mean_pitch_deg);
     if (PLUMAGE_FILLED(v, probes)) j["coverage_probes"] = v.probes;
     if (PLUMAGE_FILLED(v, buried_probes)) j["buried_probes"] = v.buried_probes;
+    if (PLUMAGE_FILLED(v, tip_height_median)) put(j, "tip_height_median", v.tip_height_median);
+    if (PLUMAGE_FILLED(v, tip_height_p90)) put(j, "tip_height_p90", v.tip_height_p90);
+    if (PLUMAGE_FILLED(v, bristle_percent)) put(j, "bristle_percent", v.bristle_percent);
 }
 
 // The adjustment's figures, shared by `static` and each frame.
@@ -45,7 +48,7 @@ void put_memory(json& j, const MemoryUsage& m) {
     if (m.heap_kib) j["heap_kib"] = *m.heap_kib;
 }
 
-// Mean, max or min of `key` over the frames that have it.
+// Mean (how 0), max (how > 0) or min (how < 0) of `key` over the frames that have it.
 std::optional<double> fold(const json& frames, const char* key, int how) {
     std::optional<double> acc;
     size_t n = 0;
@@ -174,7 +177,7 @@ json Report::summary() const {
     const auto add = [&](const char* key, const char* field, int how) {
         const std::optional<double> v = fold(frames_, field, how);
         if (!v) return;
-        if (how > 0) s[key] = static_cast<uint64_t>(*v);  // a maximum of counts is a count
+        if (how == 1) s[key] = static_cast<uint64_t>(*v);  // a maximum of counts is a count
         else s[key] = *v;
     };
     add("mean_adjusted", "adjusted", 0);
@@ -186,6 +189,9 @@ json Report::summary() const {
     add("max_intersecting_pairs", "intersecting_pairs", 1);
     add("max_body_penetrations", "body_penetrations", 1);
     add("min_coverage", "coverage", -1);
+    add("max_tip_height_median", "tip_height_median", 2);
+    add("max_tip_height_p90", "tip_height_p90", 2);
+    add("max_bristle_percent", "bristle_percent", 2);
     return s;
 }
 

@@ -443,6 +443,24 @@ int flow_map() {
     return 0;
 }
 
+// With no flow given, feathers flow from the front of the model (+Z for a
+// glTF file, -X for the built-in body) towards its back.
+int default_flow() {
+    sheet().write(path("front.glb"), GltfFormat::Glb);
+    const json sheet_run = dress("front_sheet", {path("front.glb"), "--frames", "0", "--feathers", "120"}, 0);
+    CHECK_MSG(sheet_run["config"].contains("flow_source"), sheet_run["config"].dump());
+    CHECK(sheet_run["config"]["flow_source"] == json::array({0.0, 0.0, 1.0}));
+    const std::array<double, 3> sheet_shaft = mean_shaft(path("front_sheet.glb"), sheet_run.value("feathers", size_t{0}));
+    CHECK_MSG(sheet_shaft[2] < -0.3, std::to_string(sheet_shaft[0]) + "," + std::to_string(sheet_shaft[2]));
+    const json body = dress("front_builtin", {"--frames", "0", "--feathers", "300"}, 0);
+    CHECK_MSG(body["config"]["flow_source"][0] == 0.0, body["config"].dump());
+    const std::array<double, 3> body_shaft = mean_shaft(path("front_builtin.glb"), body.value("feathers", size_t{0}));
+    CHECK_MSG(body_shaft[0] > 0.5, std::to_string(body_shaft[0]));
+    const json given = dress("front_given", {path("front.glb"), "--frames", "0", "--feathers", "120", "--flow", "1,0,0"}, 0);
+    CHECK(!given["config"].contains("flow_source"));
+    return 0;
+}
+
 // Per-vertex maps read from vertex attributes reach the library: a spacing
 // map of 0 leaves the left half of the sheet bare, whether it comes from a
 // float attribute or from one channel of a normalized colour.
@@ -567,6 +585,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"frame_figures", frame_figures},
     {"vertex_maps", vertex_maps},
     {"flow_map", flow_map},
+    {"default_flow", default_flow},
     {"truncated", truncated},
     {"not_gltf", not_gltf},
     {"missing", missing},

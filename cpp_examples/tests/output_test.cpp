@@ -228,6 +228,9 @@ void report_summary() {
         v.mean_pitch_deg = std::nan("");  // not JSON: left out
         v.probes = 100;
         v.buried_probes = static_cast<uint64_t>(k);
+        v.tip_height_median = 0.1 + 0.05 * k;
+        v.tip_height_p90 = 0.25 - 0.1 * k;
+        v.bristle_percent = 1.5 * k;
         r.add_frame(static_cast<size_t>(k), k / 30.0, 0.002, s, v);
     }
     const json sum = r.to_json()["summary"];
@@ -235,6 +238,8 @@ void report_summary() {
     CHECK(std::fabs(sum["min_coverage"].get<double>() - 0.8) < 1e-12 && std::fabs(sum["mean_step_seconds"].get<double>() - 0.002) < 1e-12);
     CHECK(!r.to_json()["frames"][0].contains("mean_pitch_deg"));
     CHECK(r.to_json()["frames"][1]["coverage_probes"] == 100 && r.to_json()["frames"][1]["buried_probes"] == 1);
+    CHECK(std::fabs(sum["max_tip_height_median"].get<double>() - 0.15) < 1e-12 && std::fabs(sum["max_tip_height_p90"].get<double>() - 0.25) < 1e-12);
+    CHECK(sum["max_bristle_percent"] == 1.5 && r.to_json()["frames"][0]["tip_height_p90"] == 0.25);
     CHECK(tidy(0.1f) == 0.1 && tidy(0.6f) == 0.6);
 }
 

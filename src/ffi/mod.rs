@@ -526,7 +526,7 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
             levels: r.levels as u64,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
-        unsafe { write_versioned(out, std::mem::size_of::<PlumageFrameStats>(), value, "PlumageFrameStats") }
+        unsafe { write_versioned(out, FRAME_STATS_V1_SIZE, value, "PlumageFrameStats") }
     })
 }
 
@@ -555,9 +555,12 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
             mean_pitch_deg: r.mean_pitch_deg,
             probes: r.probes as u64,
             buried_probes: r.buried_probes as u64,
+            tip_height_median: r.tip_height_median,
+            tip_height_p90: r.tip_height_p90,
+            bristle_percent: r.bristle_percent,
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
-        unsafe { write_versioned(out, std::mem::size_of::<PlumageValidation>(), value, "PlumageValidation") }
+        unsafe { write_versioned(out, VALIDATION_V1_SIZE, value, "PlumageValidation") }
     })
 }
 

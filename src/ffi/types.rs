@@ -74,6 +74,8 @@ pub struct PlumageConfig {
     /// its length.
     pub theta_s: f32,
     /// Flow axis for the orientation field when the mesh gives no hints.
+    /// (0, 0, 0), the default, derives it from the mesh: its principal
+    /// axis, pointing to −Z (glTF models face +Z), else down (−Y), else +X.
     pub flow_axis: [f32; 3],
     /// Non-zero: recompute neighbourhoods at the current pose every frame.
     pub recompute_neighbourhoods: u32,
@@ -562,6 +564,14 @@ pub struct PlumageValidation {
     /// Probes of the feathered skin left out of `coverage` because they lie
     /// inside the body.
     pub buried_probes: u64,
+    /// Median distance from a placed feather's tip to the body surface, in
+    /// feather lengths (appended). A coat that lies down keeps it small.
+    pub tip_height_median: f64,
+    /// 90th percentile of the same, in feather lengths.
+    pub tip_height_p90: f64,
+    /// Percentage of placed feathers whose tip stands more than half a
+    /// feather length off the skin (bristles).
+    pub bristle_percent: f64,
 }
 
 /// Caller buffers for `plumage_system_feather_geometry`: every feather as a
@@ -658,6 +668,13 @@ impl PlumageFeatherGeometry {
     }
 }
 
+/// The first published layout of `PlumageValidation` (up to
+/// `mean_pitch_deg`): older callers' structs are filled up to their size.
+pub(crate) const VALIDATION_V1_SIZE: usize = std::mem::offset_of!(PlumageValidation, probes);
+/// The layout of `PlumageFrameStats` before `neighbourhood_seconds` was
+/// appended: such structs are filled up to their size.
+pub(crate) const FRAME_STATS_V1_SIZE: usize = std::mem::offset_of!(PlumageFrameStats, neighbourhood_seconds);
+
 // Every struct the library copies out must be free of padding, so that the
 // bytes a host sees are fully defined (and comparable with memcmp).
 const _: () = {
@@ -666,5 +683,5 @@ const _: () = {
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 17);
-    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 6);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
 };

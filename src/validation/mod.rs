@@ -4,9 +4,11 @@
 //! are integers and sums run in index order.
 
 mod coverage;
+mod lie;
 mod tri_tri;
 
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
+pub use lie::{BRISTLE_TIP_HEIGHT, TipHeights, summarise_tip_heights, tip_heights};
 
 use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
@@ -39,6 +41,8 @@ pub struct Validation {
     pub buried_probes: usize,
     /// Mean pitch, degrees.
     pub mean_pitch_deg: f64,
+    /// How far the tips stand off the skin (see [`tip_heights`]).
+    pub tip_heights: TipHeights,
 }
 
 /// Runs every check. `feather_triangles[i]` are feather i's triangles at
@@ -66,6 +70,7 @@ pub fn validate(
         probes: coverage.probes,
         buried_probes: coverage.buried,
         mean_pitch_deg: mean_pitch_deg(poses),
+        tip_heights: summarise_tip_heights(&tip_heights(frames, shapes, poses, body)),
     }
 }
 
