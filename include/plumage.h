@@ -44,6 +44,35 @@
 #include <stdint.h>
 
 /**
+ * Default largest bend at a joint of a segmented shaft (radians, about
+ * 23°): three joints then curl a feather by up to about 70°, round a
+ * body or a wing's rim, while each segment stays visibly straight.
+ */
+#define DEFAULT_BEND_LIMIT 0.4
+
+/**
+ * Most triangles of a posed feather: per vane, every interior joint's
+ * station counts in the fans of both its segments, the vane corners in one
+ * (see [`ShaftPlan`]).
+ */
+#define MAX_TRIANGLES (2 * ((2 * MAX_SEGMENTS) - 1))
+
+/**
+ * Most shaft segments a feather may have.
+ */
+#define MAX_SEGMENTS 4
+
+/**
+ * Most joints between shaft segments.
+ */
+#define MAX_JOINTS (MAX_SEGMENTS - 1)
+
+/**
+ * Most vane-edge stations: the interior joints and the vane corners.
+ */
+#define MAX_STATIONS MAX_SEGMENTS
+
+/**
  * The ABI version of this header; bumped only by incompatible changes.
  */
 #define PLUMAGE_ABI_VERSION 1
@@ -341,6 +370,17 @@ typedef struct PlumageConfig {
    * `feather_length` is set.
    */
   float curvature_min_scale;
+  /**
+   * Shaft segments of every feather, 1 to 4 (default 1, the rigid
+   * kite): with more, each joint may bend, so a feather drapes over the
+   * feathers and the skin beneath it instead of standing off them.
+   */
+  uint32_t shaft_segments;
+  /**
+   * Largest bend at each joint of a segmented shaft, radians, in
+   * [0, 1.2] (default 0.4; 0 keeps feathers straight).
+   */
+  float bend_limit;
 } PlumageConfig;
 
 /**
@@ -945,13 +985,16 @@ uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
                                  size_t *out_len);
 
 /**
- * Copies the feathers' triangles as xyz floats: two triangles (one per
- * vane) of three corners per feather, 18 floats per feather, in the order
- * of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
- * Corner order per feather: (root, tip, left corner), (root, right corner,
- * tip), where "left" lies on the binormal side (normal × shaft); both
- * triangles face away from the skin, and the root and tip corners of the
- * two triangles are bit-identical, so a host can share them.
+ * Copies the feathers' triangles as xyz floats, in the order of
+ * `plumage_system_feathers`; `capacity` and `*out_len` count floats. A
+ * feather of one shaft segment (the default, `shaft_segments` = 1) has two
+ * triangles of three corners, 18 floats: (root, tip, left corner), (root,
+ * right corner, tip), where "left" lies on the binormal side (normal ×
+ * shaft); both face away from the skin, and the root and tip corners of
+ * the two triangles are bit-identical, so a host can share them. With S ≥ 2
+ * segments each feather has 4·S − 4 triangles (9 floats each), in the
+ * order of `plumage_system_feather_geometry`'s indices; that call also
+ * gives shared vertices, normals and UVs.
  *
  * # Safety
  * `sys` is NULL or a live handle from `plumage_system_create`; other threads

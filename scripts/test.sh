@@ -18,6 +18,21 @@ ctest --test-dir build --output-on-failure
 echo "== install into a temporary prefix, then the separate consumer project against it"
 scripts/consumer_test.sh build
 
+echo "== Python package: pytest (venv in build/python-venv)"
+py_env=build/python-venv
+[ -x "$py_env/bin/python" ] || python3 -m venv "$py_env"
+if ! "$py_env/bin/python" -c "import numpy, pytest, pxr, pygltflib" 2>/dev/null; then
+  "$py_env/bin/python" -m pip install -q --disable-pip-version-check numpy pytest usd-core pygltflib
+fi
+"$py_env/bin/python" -m pip install -q --disable-pip-version-check ./python
+py_status=0
+PLUMAGE_GLTF_HOST="$PWD/build/plumage_gltf" "$py_env/bin/python" -m pytest -q python/tests || py_status=$?
+if [ "$py_status" -ne 0 ]; then
+  # 5 = pytest collected no test: a failure here, never a pass
+  echo "error: pytest exited with $py_status" >&2
+  exit "$py_status"
+fi
+
 echo "== C++ build and ctest under AddressSanitizer + UndefinedBehaviorSanitizer"
 cmake -S cpp_examples -B build-sanitize -DCMAKE_BUILD_TYPE=Debug -DPLUMAGE_SANITIZE=ON -DPLUMAGE_TEST_HOOKS=ON >/dev/null
 cmake --build build-sanitize -j"$(nproc)"

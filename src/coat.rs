@@ -103,7 +103,7 @@ impl Dressing {
                 if config.feather_thickness <= 0.0 {
                     s.thickness *= r.width_scale;
                 }
-                s
+                s.with_segments(config.shaft_segments)
             })
             .collect()
     }
@@ -111,6 +111,12 @@ impl Dressing {
     /// Number of feathers.
     pub fn len(&self) -> usize {
         self.roots.len()
+    }
+
+    /// Joints of the feathers' shafts (every feather has as many: the
+    /// configuration's segments less one).
+    pub fn shaft_joints(&self) -> usize {
+        self.shapes.first().map_or(0, |s| s.segment_count() - 1)
     }
 
     /// Whether there are no feathers.
@@ -256,21 +262,14 @@ impl Coat {
     }
 
     /// Fills the host-facing records and triangles of every feather.
-    pub fn export(&self, dressing: &Dressing, records: &mut Vec<FeatherRecord>, triangles: &mut Vec<[[f32; 3]; 6]>) {
+    pub fn export(&self, dressing: &Dressing, records: &mut Vec<FeatherRecord>, triangles: &mut Vec<[f32; 3]>) {
         records.clear();
         triangles.clear();
         for (i, ((root, frame), (pose, shape))) in
             dressing.roots.iter().zip(&self.frames).zip(self.poses.iter().zip(&dressing.shapes)).enumerate()
         {
             let tris = feather_triangles(frame, shape, *pose);
-            triangles.push([
-                tris[0][0].to_array(),
-                tris[0][1].to_array(),
-                tris[0][2].to_array(),
-                tris[1][0].to_array(),
-                tris[1][1].to_array(),
-                tris[1][2].to_array(),
-            ]);
+            triangles.extend(tris.iter().flatten().map(|p| p.to_array()));
             records.push(FeatherRecord {
                 id: root.id,
                 order_index: self.order.rank_of(i as u32),
@@ -294,24 +293,25 @@ impl Coat {
 /// the positions, so they are recomputed on load rather than stored.
 ///
 /// Layout: frame index (u64); welded positions (u64 count, then xyz f32
-/// each); poses (u64 count, then pitch, roll and scale f32 each); the ordering
+/// each); poses (u64 count of floats, then pitch, roll, scale and the S − 1 joint bends, f32 each); the ordering
 /// report (four u64 counts, seconds f64); the frame report (frame index and
 /// nine counts as u64, three timings f64); the neighbourhoods
 /// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]);
 /// the staleness ([`Staleness::write_state`]).
 impl Coat {
     /// Appends the coat's state to a state blob.
-    pub fn write_state(&self, w: &mut Writer) {
+    pub fn write_state(&self, w: &mut Writer, joints: usize) {
         w.u64(self.frame_index);
         w.u64(3 * self.positions.len() as u64);
         for p in &self.positions {
             p.to_array().iter().for_each(|&x| w.f32(x));
         }
-        w.u64(3 * self.poses.len() as u64);
+        w.u64(((3 + joints) * self.poses.len()) as u64);
         for pose in &self.poses {
             w.f32(pose.pitch);
             w.f32(pose.roll);
             w.f32(pose.scale);
+            pose.bends[..joints].iter().for_each(|&b| w.f32(b));
         }
         // Destructured in full (as in `read_state`) so that a new report
         // field cannot be forgotten here.
@@ -366,18 +366,24 @@ impl Coat {
             }
             positions.push(p);
         }
-        r.len(4, Some(3 * n))?;
+        let joints = dressing.shaft_joints();
+        r.len(4, Some((3 + joints) * n))?;
         let limits = &dressing.adjust_params;
         let mut poses = Vec::with_capacity(n);
         for _ in 0..n {
-            let pose = FeatherPose::new(r.f32()?, r.f32()?).with_scale(r.f32()?);
-            if !(pose.pitch >= limits.min_pitch
+            let mut pose = FeatherPose::new(r.f32()?, r.f32()?).with_scale(r.f32()?);
+            for b in &mut pose.bends[..joints] {
+                *b = r.f32()?;
+            }
+            let bent_within = pose.bends.iter().all(|b| b.abs() <= limits.bend_limit);
+            if !(bent_within
+                && pose.pitch >= limits.min_pitch
                 && pose.pitch <= limits.max_pitch
                 && pose.roll.abs() <= limits.max_roll
                 && (pose.scale >= limits.min_scale || pose.scale == 0.0)
                 && pose.scale <= 1.0)
             {
-                return Err(invalid_state("a saved feather pose lies outside the pitch, roll and size limits"));
+                return Err(invalid_state("a saved feather pose lies outside the pitch, roll, size and bend limits"));
             }
             poses.push(pose);
         }

@@ -109,6 +109,14 @@ pub struct Config {
     /// multipliers; off when `feather_length` is set (feathers then do
     /// not follow the spacing).
     pub curvature_min_scale: f32,
+    /// Shaft segments of every feather, 1 to 4 (see
+    /// [`FeatherShape::segments`](crate::feather::FeatherShape::segments)):
+    /// 1 is the rigid kite; with more, each joint may bend so the feather
+    /// drapes over what lies beneath it.
+    pub shaft_segments: u32,
+    /// Largest bend at each joint of a segmented shaft, radians, in
+    /// [0, 1.2] (0 keeps feathers straight).
+    pub bend_limit: f32,
 }
 
 impl Default for Config {
@@ -139,6 +147,8 @@ impl Default for Config {
             flow_source: None,
             recompute_neighbourhoods: true,
             curvature_min_scale: 0.4,
+            shaft_segments: 1,
+            bend_limit: crate::adjustment::DEFAULT_BEND_LIMIT,
         }
     }
 }
@@ -161,6 +171,16 @@ impl Config {
             if !v.is_finite() || v < 0.0 {
                 return bad(format!("config.{name} must be finite and >= 0 (got {v})"));
             }
+        }
+        if !(1..=crate::feather::MAX_SEGMENTS as u32).contains(&self.shaft_segments) {
+            return bad(format!(
+                "config.shaft_segments must be in [1, {}] (got {})",
+                crate::feather::MAX_SEGMENTS,
+                self.shaft_segments
+            ));
+        }
+        if !(self.bend_limit.is_finite() && (0.0..=1.2).contains(&self.bend_limit)) {
+            return bad(format!("config.bend_limit must be in [0, 1.2] radians (got {})", self.bend_limit));
         }
         if !self.theta.is_finite() {
             return bad(format!("config.theta must be finite (got {})", self.theta));

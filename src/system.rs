@@ -8,7 +8,7 @@ use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
-use crate::feather::FeatherMesh;
+use crate::feather::{FeatherMesh, FeatherTriangles, MAX_TRIANGLES, triangles_per_feather};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
@@ -37,7 +37,7 @@ pub struct System {
     sampling: SamplingReport,
     coat: Coat,
     records: Vec<FeatherRecord>,
-    triangles: Vec<[[f32; 3]; 6]>,
+    triangles: Vec<[f32; 3]>,
     work: Workspace,
     step_work: StepWorkspace,
     frame_positions: Vec<Vec3>,
@@ -161,9 +161,10 @@ impl System {
         &self.records
     }
 
-    /// Each feather's two triangles (one per vane), world space, in the
-    /// order of [`System::feathers`].
-    pub fn feather_triangles(&self) -> &[[[f32; 3]; 6]] {
+    /// Each feather's triangles (see [`crate::feather::FeatherTriangles`]:
+    /// two, one per vane, for the kite) as their corners, world space,
+    /// feather after feather in the order of [`System::feathers`].
+    pub fn feather_triangles(&self) -> &[[f32; 3]] {
         &self.triangles
     }
 
@@ -199,12 +200,18 @@ impl System {
         self.maybe_test_panic();
         let n = self.dressing.len();
         let probes = (COVERAGE_PROBES_PER_FEATHER * n).clamp(COVERAGE_PROBES_MIN, COVERAGE_PROBES_MAX);
-        let tris: Vec<[[Vec3; 3]; 2]> = self
-            .triangles
+        let mut corners = self.triangles.iter().map(|&p| Vec3::from_array(p));
+        let tris: Vec<FeatherTriangles> = self
+            .dressing
+            .shapes
             .iter()
-            .map(|t| {
-                let v = t.map(Vec3::from_array);
-                [[v[0], v[1], v[2]], [v[3], v[4], v[5]]]
+            .map(|shape| {
+                let mut t = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+                let n = triangles_per_feather(shape);
+                for triangle in &mut t[..n] {
+                    *triangle = std::array::from_fn(|_| corners.next().unwrap_or(Vec3::NAN));
+                }
+                FeatherTriangles::from_slice(&t[..n])
             })
             .collect();
         let c = &self.coat;
@@ -316,7 +323,7 @@ impl System {
     /// creation is identified by the blob's fingerprint.
     pub fn save_state(&self) -> Vec<u8> {
         let mut w = Writer::new(self.state_fingerprint());
-        self.coat.write_state(&mut w);
+        self.coat.write_state(&mut w, self.dressing.shaft_joints());
         let readjusted = self.readjusted();
         w.u64(readjusted.len() as u64);
         readjusted.iter().for_each(|&f| w.u8(u8::from(f)));
@@ -380,6 +387,8 @@ impl System {
             flow_source,
             recompute_neighbourhoods,
             curvature_min_scale,
+            shaft_segments,
+            bend_limit,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
@@ -399,6 +408,7 @@ impl System {
             *height_field_v as u64,
             u64::from(*recompute_neighbourhoods),
             u64::from(flow_source.is_some()),
+            u64::from(*shaft_segments),
         ];
         words.extend(
             [
@@ -416,6 +426,7 @@ impl System {
                 *theta_s,
                 *drift_tolerance,
                 *curvature_min_scale,
+                *bend_limit,
                 flow_axis.x,
                 flow_axis.y,
                 flow_axis.z,
@@ -437,6 +448,7 @@ impl System {
             words.extend(root.rest_direction.map(bits));
             words.extend([root.spacing, root.length_scale, root.width_scale].map(bits));
             words.extend([shape.length, shape.width, shape.thickness, shape.vane_split].map(bits));
+            words.push(u64::from(shape.segments));
         }
         hash64(&words)
     }

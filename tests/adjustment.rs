@@ -9,7 +9,7 @@ use plumage::adjustment::{
     adjust_feather, adjust_in_order,
 };
 use plumage::body::BodyIndex;
-use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
+use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{ProbeSkin, Validation, coverage, intersecting_pairs, validate};
@@ -204,7 +204,7 @@ impl Scene {
         (poses, stats)
     }
 
-    fn triangles_at(&self, poses: &[FeatherPose]) -> Vec<[[Vec3; 3]; 2]> {
+    fn triangles_at(&self, poses: &[FeatherPose]) -> Vec<FeatherTriangles> {
         (0..poses.len()).map(|i| feather_triangles(&self.frames[i], &self.shapes[i], poses[i])).collect()
     }
 
@@ -426,9 +426,9 @@ fn a_later_feather_lies_on_an_earlier_one_with_just_enough_pitch() {
         "pitch {} more than a cell above the minimum {exact} (bound {slack})",
         second.pose.pitch
     );
-    let [a, b] = feather_triangles(&behind, &shape, second.pose);
-    let [p, q] = obstacle.triangles;
-    assert!(intersecting_pairs(&[[a, b], [p, q]]).is_empty());
+    let mine = feather_triangles(&behind, &shape, second.pose);
+    let a = mine[0];
+    assert!(intersecting_pairs(&[mine, obstacle.triangles]).is_empty());
     // The tip went up, over the earlier feather's top.
     assert!(a[1].z > (shape.length - d) * tan_first + t, "tip at {}", a[1].z);
 }
@@ -782,4 +782,72 @@ fn warm_scratch_allocates_nothing() {
     });
     assert!(counts[0] > 0);
     assert_eq!(&counts[1..], &[0, 0], "allocations per call: {counts:?}");
+}
+
+/// A segmented feather (4 segments) adjusted alone over `body` from a root
+/// at `root` with normal +z pointing +x: its straight and its draped pose,
+/// and the tip's distance to the body in feather lengths for each.
+fn drape_over(body_pos: &[Vec3], body_tris: &[[u32; 3]], root: Vec3) -> (FeatherPose, f32, FeatherPose, f32) {
+    let body = BodyIndex::from_mesh(body_pos, body_tris);
+    let shape = FeatherShape::for_spacing(1.0).with_segments(4);
+    let frame = RootFrame::from_normal_and_direction(root, Vec3::Z, Vec3::X).unwrap();
+    let mut field = HeightField::new(32, 16);
+    let mut tip_height = |params: &AdjustParams| {
+        let pose =
+            adjust_feather(&frame, &shape, FeatherPose::default(), &[], &body, params, AdjustSteps::Full, &mut field)
+                .pose;
+        let tip = plumage::feather::tip_position(&frame, &shape, pose);
+        let distance = body.closest_point(tip, 10.0 * shape.length, &mut Vec::new()).unwrap().distance;
+        // No segment passes through the body beyond the root socket.
+        let tris = feather_triangles(&frame, &shape, pose);
+        let poses = [pose];
+        let v = plumage::validation::body_penetrations(&[frame], &[shape], &poses, &body);
+        assert!(v.is_empty(), "the feather at {pose:?} passes through the body ({} triangles)", tris.len());
+        (pose, distance / shape.length)
+    };
+    let (straight, straight_height) = tip_height(&AdjustParams { bend_limit: 0.0, ..AdjustParams::default() });
+    let (draped, draped_height) = tip_height(&AdjustParams::default());
+    assert!(straight.is_straight());
+    let limit = AdjustParams::default().bend_limit;
+    assert!(draped.bends.iter().all(|b| b.abs() <= limit + 1e-6), "bends {:?} beyond the limit {limit}", draped.bends);
+    (straight, straight_height, draped, draped_height)
+}
+
+#[test]
+fn a_segmented_feather_drapes_over_a_cylinder() {
+    // A cylinder of radius 0.8 feather lengths about the y axis; the root
+    // on its top, the feather pointing round it.
+    let (radius, length) = (3.2f32, 4.0f32);
+    let (pos, tris) = grid_mesh(96, 8, true, false, |u, v| {
+        let a = std::f32::consts::TAU * u;
+        Vec3::new(radius * a.sin(), (v - 0.5) * 3.0 * length, radius * a.cos())
+    });
+    let (_, straight, draped_pose, draped) = drape_over(&pos, &tris, Vec3::new(0.0, 0.0, radius));
+    println!("cylinder: tip height straight {straight:.3} L, draped {draped:.3} L, pose {draped_pose:?}");
+    assert!(straight > 0.15, "a straight feather stands off a cylinder this thin ({straight})");
+    assert!(draped < 0.05, "draped, the tip lies on the cylinder (within a few thicknesses): {draped}");
+}
+
+#[test]
+fn a_segmented_feather_drapes_over_a_step() {
+    // A floor at height 1.2 up to x = 2 (half the feather), a wall, then a
+    // floor at 0: the feather lies on the upper floor and bends down over
+    // the edge.
+    let (a, h) = (2.0f32, 1.2f32);
+    let profile = [(-4.0f32, h), (a, h), (a, 0.0), (12.0, 0.0)];
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for pair in profile.windows(2) {
+        let base = pos.len() as u32;
+        for &(x, z) in pair {
+            pos.push(Vec3::new(x, -6.0, z));
+            pos.push(Vec3::new(x, 6.0, z));
+        }
+        tris.push([base, base + 2, base + 3]);
+        tris.push([base, base + 3, base + 1]);
+    }
+    let (_, straight, draped_pose, draped) = drape_over(&pos, &tris, Vec3::new(0.0, 0.0, h));
+    println!("step: tip height straight {straight:.3} L, draped {draped:.3} L, bends {:?}", draped_pose.bends);
+    assert!(draped < 0.5 * straight, "draped over the edge the tip comes down ({straight} -> {draped})");
+    assert!(draped_pose.bends.iter().any(|&b| b < 0.0));
 }

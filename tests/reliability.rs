@@ -12,7 +12,7 @@ fn all_finite(sys: &System) -> bool {
     sys.feathers().iter().all(|f| {
         f.root.iter().chain(&f.normal).chain(&f.direction).all(|x| x.is_finite())
             && [f.pitch, f.roll, f.length, f.width, f.thickness].iter().all(|x| x.is_finite())
-    }) && sys.feather_triangles().iter().flatten().flatten().all(|x| x.is_finite())
+    }) && sys.feather_triangles().iter().flatten().all(|x| x.is_finite())
 }
 
 /// A random soup: vertices in a box, triangles over random indices (some
@@ -70,7 +70,7 @@ fn feather_bytes(sys: &System) -> Vec<u8> {
             out.extend_from_slice(&x.to_bits().to_le_bytes());
         }
     }
-    for x in sys.feather_triangles().iter().flatten().flatten() {
+    for x in sys.feather_triangles().iter().flatten() {
         out.extend_from_slice(&x.to_bits().to_le_bytes());
     }
     out

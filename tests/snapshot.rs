@@ -88,7 +88,7 @@ fn observe(sys: &System) -> Observed {
         floats.chain(&[f.pitch, f.roll, f.length, f.width, f.thickness]).for_each(|x| put(x.to_bits()));
         [f.order_index, f.triangle, f.id as u32, (f.id >> 32) as u32].into_iter().for_each(&mut put);
     }
-    sys.feather_triangles().iter().flatten().flatten().for_each(|x| put(x.to_bits()));
+    sys.feather_triangles().iter().flatten().for_each(|x| put(x.to_bits()));
     let frame = FrameReport {
         reorder_seconds: 0.0,
         adjust_seconds: 0.0,

@@ -4,7 +4,7 @@
 
 use glam::{DVec3, Vec3};
 use plumage::body::BodyIndex;
-use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
+use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{
@@ -193,7 +193,7 @@ fn random_feathers(n: usize, seed: u64) -> (Vec<RootFrame>, Vec<FeatherShape>, V
     (frames, shapes, poses)
 }
 
-fn posed(frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) -> Vec<[[Vec3; 3]; 2]> {
+fn posed(frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) -> Vec<FeatherTriangles> {
     (0..frames.len()).map(|i| feather_triangles(&frames[i], &shapes[i], poses[i])).collect()
 }
 
@@ -267,14 +267,14 @@ fn coverage_counts_probes_under_feathers() {
     let (pos, tris, body) = plane_body(1.0);
     // A huge flat feather a little above the whole patch: everything covered.
     let lifted = RootFrame::from_normal_and_direction(Vec3::new(-3.0, 0.0, 0.1), Vec3::Z, Vec3::X).unwrap();
-    let big = FeatherShape { length: 8.0, width: 12.0, thickness: 0.01, vane_split: 0.3 };
+    let big = FeatherShape { length: 8.0, width: 12.0, thickness: 0.01, vane_split: 0.3, segments: 1 };
     let cover = [feather_triangles(&lifted, &big, FeatherPose::default())];
     assert_eq!(coverage(&cover, 6.0, &ProbeSkin::whole(&pos, &tris), &body, 500, 3), 1.0);
     // Beyond reach: nothing.
     assert_eq!(coverage(&cover, 0.05, &ProbeSkin::whole(&pos, &tris), &body, 500, 3), 0.0);
     // A feather over the x > 0 half only (a wide kite whose root is at x = 0).
     let half = RootFrame::from_normal_and_direction(Vec3::new(0.0, 0.0, 0.1), Vec3::Z, Vec3::X).unwrap();
-    let kite = FeatherShape { length: 4.0, width: 40.0, thickness: 0.01, vane_split: 0.01 };
+    let kite = FeatherShape { length: 4.0, width: 40.0, thickness: 0.01, vane_split: 0.01, segments: 1 };
     let c = coverage(
         &[feather_triangles(&half, &kite, FeatherPose::default())],
         1.0,

@@ -9,82 +9,11 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <optional>
 
 namespace plumage_host {
 namespace {
-
-constexpr size_t kFeatherFloats = 18;  // two triangles of three xyz corners
-
-// Which of a feather's six corners coincide: label[c] is the first corner equal to c.
-using CornerPattern = std::array<uint8_t, 6>;
-
-CornerPattern pattern_of(const float* corners) {
-    CornerPattern label{};
-    for (uint8_t c = 0; c < 6; ++c) {
-        label[c] = c;
-        for (uint8_t e = 0; e < c; ++e) {
-            if (std::memcmp(corners + 3 * c, corners + 3 * e, 3 * sizeof(float)) == 0) {
-                label[c] = label[e];
-                break;
-            }
-        }
-    }
-    return label;
-}
-
-size_t distinct(const CornerPattern& p) {
-    size_t n = 0;
-    for (uint8_t c = 0; c < 6; ++c) n += p[c] == c;
-    return n;
-}
-
-// Four vertices per feather (root, tip, two vane corners) when every feather
-// of every pose shares the same pattern of four distinct corners; otherwise
-// (degenerate feathers, corners that differ by rounding) six.
-std::optional<CornerPattern> shared_pattern(const std::vector<const std::vector<float>*>& poses) {
-    std::optional<CornerPattern> shared;
-    for (const std::vector<float>* pose : poses) {
-        for (size_t f = 0; f + kFeatherFloats <= pose->size(); f += kFeatherFloats) {
-            const CornerPattern p = pattern_of(pose->data() + f);
-            if (!shared) shared = p;
-            if (p != *shared || distinct(p) != 4) return std::nullopt;
-        }
-    }
-    return shared;
-}
-
-// The vertices one layout keeps per feather, in order.
-std::vector<uint8_t> kept_corners(const std::optional<CornerPattern>& pattern) {
-    std::vector<uint8_t> kept;
-    for (uint8_t c = 0; c < 6; ++c) {
-        if (!pattern || (*pattern)[c] == c) kept.push_back(c);
-    }
-    return kept;
-}
-
-std::vector<float> pick_corners(const std::vector<float>& feathers, const std::vector<uint8_t>& kept) {
-    std::vector<float> out;
-    out.reserve(feathers.size() / kFeatherFloats * kept.size() * 3);
-    for (size_t f = 0; f + kFeatherFloats <= feathers.size(); f += kFeatherFloats) {
-        for (uint8_t c : kept) out.insert(out.end(), feathers.begin() + static_cast<long>(f + 3 * c), feathers.begin() + static_cast<long>(f + 3 * c + 3));
-    }
-    return out;
-}
-
-std::vector<uint32_t> feather_indices(size_t feathers, const std::optional<CornerPattern>& pattern, const std::vector<uint8_t>& kept) {
-    std::array<uint32_t, 6> local{};
-    for (uint8_t c = 0; c < 6; ++c) {
-        const uint8_t source = pattern ? (*pattern)[c] : c;
-        local[c] = static_cast<uint32_t>(std::find(kept.begin(), kept.end(), source) - kept.begin());
-    }
-    std::vector<uint32_t> out;
-    out.reserve(feathers * 6);
-    for (size_t f = 0; f < feathers; ++f) {
-        for (uint32_t l : local) out.push_back(static_cast<uint32_t>(f * kept.size()) + l);
-    }
-    return out;
-}
 
 // Appends buffer views and accessors to a one-buffer model.
 class GlbBuilder {
@@ -100,6 +29,11 @@ public:
         for (size_t i = 0; i < xyz.size(); ++i) lo[i % 3] = std::min<double>(lo[i % 3], xyz[i]), hi[i % 3] = std::max<double>(hi[i % 3], xyz[i]);
         return accessor(view(xyz.data(), xyz.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
                         xyz.size() / 3, TINYGLTF_TYPE_VEC3, lo, hi);
+    }
+
+    int vectors(const std::vector<float>& values, int type, size_t width) {
+        return accessor(view(values.data(), values.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                        values.size() / width, type, {}, {});
     }
 
     int scalars(const std::vector<float>& values, bool with_bounds) {
@@ -164,23 +98,42 @@ private:
     tinygltf::Model model_;
 };
 
-// A node showing `rest`, with one morph target (a displacement) per frame.
-int add_animated_mesh(GlbBuilder& b, const char* name, const std::vector<float>& rest, const std::vector<uint32_t>& indices,
-                      const std::vector<std::vector<float>>& frames, int material) {
+// The vertex attributes of one animated mesh: the rest pose and, per
+// frame, the positions (and normals, when given) its morph targets reach.
+struct AnimatedAttributes {
+    const std::vector<float>& rest;
+    const std::vector<std::vector<float>>& frames;
+    const std::vector<float>* normals = nullptr;  // at rest
+    const std::vector<std::vector<float>>* normal_frames = nullptr;
+    const std::vector<float>* uvs = nullptr;
+    const std::vector<float>* ids = nullptr;
+};
+
+std::vector<float> difference(const std::vector<float>& a, const std::vector<float>& b) {
+    std::vector<float> d(a.size());
+    for (size_t i = 0; i < a.size(); ++i) d[i] = a[i] - b[i];
+    return d;
+}
+
+// A node showing the rest pose, with one morph target (a displacement) per frame.
+int add_animated_mesh(GlbBuilder& b, const char* name, const AnimatedAttributes& a, const std::vector<uint32_t>& indices, int material) {
     tinygltf::Primitive prim;
     prim.mode = TINYGLTF_MODE_TRIANGLES;
     prim.material = material;
-    prim.attributes["POSITION"] = b.positions(rest);
-    prim.indices = b.indices(indices, rest.size() / 3);
-    std::vector<float> delta(rest.size());
-    for (const std::vector<float>& frame : frames) {
-        for (size_t i = 0; i < rest.size(); ++i) delta[i] = frame[i] - rest[i];
-        prim.targets.push_back({{"POSITION", b.positions(delta)}});
+    prim.attributes["POSITION"] = b.positions(a.rest);
+    if (a.normals) prim.attributes["NORMAL"] = b.vectors(*a.normals, TINYGLTF_TYPE_VEC3, 3);
+    if (a.uvs) prim.attributes["TEXCOORD_0"] = b.vectors(*a.uvs, TINYGLTF_TYPE_VEC2, 2);
+    if (a.ids) prim.attributes["_FEATHER_ID"] = b.scalars(*a.ids, false);
+    prim.indices = b.indices(indices, a.rest.size() / 3);
+    for (size_t k = 0; k < a.frames.size(); ++k) {
+        std::map<std::string, int> target{{"POSITION", b.positions(difference(a.frames[k], a.rest))}};
+        if (a.normals && a.normal_frames) target["NORMAL"] = b.vectors(difference((*a.normal_frames)[k], *a.normals), TINYGLTF_TYPE_VEC3, 3);
+        prim.targets.push_back(std::move(target));
     }
     tinygltf::Mesh mesh;
     mesh.name = name;
     mesh.primitives.push_back(std::move(prim));
-    mesh.weights.assign(frames.size(), 0.0);
+    mesh.weights.assign(a.frames.size(), 0.0);
     tinygltf::Model& m = b.model();
     m.meshes.push_back(std::move(mesh));
     tinygltf::Node node;
@@ -218,49 +171,56 @@ void add_frame_switch(GlbBuilder& b, const std::vector<double>& times, const std
 }  // namespace
 
 AnimationRecorder::AnimationRecorder(std::vector<float> body_rest, std::vector<uint32_t> body_indices, const std::vector<PlumageFeather>& feathers,
-                                     std::vector<float> feather_triangles)
-    : body_rest_(std::move(body_rest)), body_indices_(std::move(body_indices)) {
-    const size_t n = std::min(feathers.size(), feather_triangles.size() / kFeatherFloats);
-    feather_triangles.resize(n * kFeatherFloats);
-    feather_rest_ = std::move(feather_triangles);
-    for (size_t i = 0; i < n; ++i) slot_of_id_.emplace(feathers[i].id, i);
+                                     FeatherMeshData feather_mesh)
+    : body_rest_(std::move(body_rest)), body_indices_(std::move(body_indices)), feather_rest_(std::move(feather_mesh)) {
+    size_t first = 0;
+    for (size_t i = 0; i < feather_rest_.vertex_counts.size(); ++i) {
+        first_vertex_.push_back(first);
+        first += feather_rest_.vertex_counts[i];
+        if (i < feathers.size()) slot_of_id_.emplace(feathers[i].id, i);
+    }
 }
 
-std::vector<float> AnimationRecorder::arrange_feathers(const std::vector<PlumageFeather>& feathers, const std::vector<float>& triangles,
-                                                       const std::vector<float>& previous) {
-    std::vector<float> out = previous;  // a feather missing from this frame keeps its last pose
-    const size_t n = std::min(feathers.size(), triangles.size() / kFeatherFloats);
-    for (size_t i = 0; i < n; ++i) {
-        const auto slot = slot_of_id_.find(feathers[i].id);
-        if (slot == slot_of_id_.end()) {
+std::pair<std::vector<float>, std::vector<float>> AnimationRecorder::arrange_feathers(const std::vector<PlumageFeather>& feathers,
+                                                                                      const FeatherMeshData& mesh) {
+    // A feather missing from this frame keeps its last pose.
+    std::vector<float> positions = feather_frames_.empty() ? feather_rest_.positions : feather_frames_.back();
+    std::vector<float> normals = normal_frames_.empty() ? feather_rest_.normals : normal_frames_.back();
+    size_t first = 0;
+    for (size_t i = 0; i < mesh.vertex_counts.size(); ++i) {
+        const size_t count = mesh.vertex_counts[i];
+        const auto slot = i < feathers.size() ? slot_of_id_.find(feathers[i].id) : slot_of_id_.end();
+        if (slot == slot_of_id_.end() || feather_rest_.vertex_counts[slot->second] != count) {
             ++untracked_;
-            continue;
+        } else {
+            const size_t to = 3 * first_vertex_[slot->second], from = 3 * first;
+            std::copy_n(mesh.positions.begin() + static_cast<long>(from), 3 * count, positions.begin() + static_cast<long>(to));
+            std::copy_n(mesh.normals.begin() + static_cast<long>(from), 3 * count, normals.begin() + static_cast<long>(to));
         }
-        std::copy_n(triangles.begin() + static_cast<long>(i * kFeatherFloats), kFeatherFloats, out.begin() + static_cast<long>(slot->second * kFeatherFloats));
+        first += count;
     }
-    return out;
+    return {std::move(positions), std::move(normals)};
 }
 
 void AnimationRecorder::add_frame(double seconds, const std::vector<float>& body, const std::vector<PlumageFeather>& feathers,
-                                  const std::vector<float>& feather_triangles) {
+                                  const FeatherMeshData& feather_mesh) {
     times_.push_back(seconds);
     body_frames_.push_back(body);
-    feather_frames_.push_back(arrange_feathers(feathers, feather_triangles, feather_frames_.empty() ? feather_rest_ : feather_frames_.back()));
+    auto [positions, normals] = arrange_feathers(feathers, feather_mesh);
+    feather_frames_.push_back(std::move(positions));
+    normal_frames_.push_back(std::move(normals));
 }
 
 void AnimationRecorder::write_glb(const std::string& path) const {
     GlbBuilder b;
-    std::vector<int> nodes{add_animated_mesh(b, "body", body_rest_, body_indices_, body_frames_, b.material("body", {0.78, 0.72, 0.66, 1.0}, false))};
-    if (!feather_rest_.empty()) {
-        std::vector<const std::vector<float>*> poses{&feather_rest_};
-        for (const std::vector<float>& f : feather_frames_) poses.push_back(&f);
-        const std::optional<CornerPattern> pattern = shared_pattern(poses);
-        const std::vector<uint8_t> kept = kept_corners(pattern);
-        std::vector<std::vector<float>> frames;
-        for (const std::vector<float>& f : feather_frames_) frames.push_back(pick_corners(f, kept));
-        const std::vector<uint32_t> indices = feather_indices(feather_rest_.size() / kFeatherFloats, pattern, kept);
-        nodes.push_back(add_animated_mesh(b, "feathers", pick_corners(feather_rest_, kept), indices, frames,
-                                          b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true)));
+    std::vector<int> nodes{add_animated_mesh(b, "body", AnimatedAttributes{body_rest_, body_frames_}, body_indices_,
+                                             b.material("body", {0.78, 0.72, 0.66, 1.0}, false))};
+    if (!feather_rest_.positions.empty()) {
+        std::vector<float> ids;
+        ids.reserve(feather_rest_.positions.size() / 3);
+        for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) ids.insert(ids.end(), feather_rest_.vertex_counts[f], static_cast<float>(f));
+        const AnimatedAttributes feathers{feather_rest_.positions, feather_frames_, &feather_rest_.normals, &normal_frames_, &feather_rest_.uvs, &ids};
+        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true)));
     }
     if (!times_.empty()) add_frame_switch(b, times_, nodes);
     tinygltf::Scene scene;

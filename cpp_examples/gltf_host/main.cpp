@@ -7,6 +7,7 @@
 #include "memory_usage.h"
 #include "options.h"
 #include "plumage_system.h"
+#include "pose_writer.h"
 #include "procedural_model.h"
 #include "progress.h"
 #include "report.h"
@@ -62,6 +63,8 @@ PlumageConfig make_config(const Options& opt) {
     if (opt.mode) cfg.mode = *opt.mode;
     if (opt.drift_tolerance_deg) cfg.drift_tolerance = static_cast<float>(*opt.drift_tolerance_deg * kPi / 180.0);
     if (opt.curvature_min_scale) cfg.curvature_min_scale = *opt.curvature_min_scale;
+    if (opt.shaft_segments) cfg.shaft_segments = *opt.shaft_segments;
+    if (opt.bend_limit_deg) cfg.bend_limit = static_cast<float>(*opt.bend_limit_deg * kPi / 180.0);
     if (opt.fluffiness_deg) cfg.fluffiness = static_cast<float>(*opt.fluffiness_deg * kPi / 180.0);
     if (opt.threads) cfg.threads = *opt.threads;
     return cfg;
@@ -149,7 +152,10 @@ public:
         report_.set_sampling(sampling_stats(*sys_));
         report_.set_ordering(ordering_stats(*sys_));
         report_.set_static(frame_stats(*sys_), opt_.validate != ValidateWhen::None ? validate(*sys_) : std::nullopt);
-        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_triangles(*sys_));
+        if (!opt_.poses.empty()) {
+            poses_ = std::make_unique<PoseWriter>(opt_.poses, cfg, opt_.fps, subject_->rest_positions(), subject_->triangles(), times_, maps_);
+        }
+        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
     }
 
     void step_frames() {
@@ -164,7 +170,8 @@ public:
             step_total_ += step_seconds;
             // Validation and copies happen after the clock stopped: not step time.
             const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
-            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_triangles(*sys_));
+            if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_mesh(*sys_));
+            if (poses_) poses_->add_frame(pose);
             report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage());
             progress_.frame_done(k + 1, times_.size(), step_seconds);
         }
@@ -188,6 +195,10 @@ public:
                 std::printf("plumage_gltf: %zu feathers absent at rest were left out of the .glb\n", recorder_->untracked_feathers());
             }
         }
+        if (poses_) {
+            poses_->finish();
+            std::printf("plumage_gltf: wrote %s\n", opt_.poses.c_str());
+        }
         if (!opt_.report.empty()) {
             report_.set_timing("total_seconds", total_.seconds());
             report_.write(opt_.report);
@@ -207,6 +218,7 @@ private:
     SystemHandle sys_;
     size_t feather_count_ = 0;
     std::optional<AnimationRecorder> recorder_;
+    std::unique_ptr<PoseWriter> poses_;
     double step_total_ = 0;
 };
 

@@ -99,8 +99,8 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report",
-                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness",
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report", "--poses",
+                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
         if (option == o) return true;
@@ -152,6 +152,8 @@ std::string usage_text() {
            "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
            "                       (default 0.4; 1 = uniform spacing)\n"
            "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
+           "  --shaft-segments S   shaft segments of a feather, 1 to 4 (default 1 = rigid kite): more lets it drape\n"
+           "  --bend-limit DEG     largest bend at each shaft joint (default 22.9)\n"
            "  --spacing-map NAME[:C]   per-vertex spacing multiplier from vertex attribute NAME (component C of a\n"
            "                       vector, default 0; e.g. _FEATHER_DENSITY or COLOR_0:0): 2 = half as dense, 0 = bare skin\n"
            "  --length-map NAME[:C]  --width-map NAME[:C]   per-vertex feather length and width multipliers\n"
@@ -160,6 +162,8 @@ std::string usage_text() {
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
            "  --report FILE.json   write the machine-readable report\n"
+           "  --poses FILE         write the library's input (rest mesh, config, maps, every frame's positions)\n"
+           "                       for `python -m plumage dress` (format in gltf_host/pose_writer.h)\n"
            "  --version, --help\n"
            "exit codes: 0 success, 1 output not written, 2 usage error, 3 unreadable or unsupported input,\n"
            "            4 library error\n";
@@ -215,6 +219,8 @@ Options parse_options(int argc, const char* const* argv) {
         } else if (arg == "--drift-tolerance") o.drift_tolerance_deg = parse_float(arg, value);
         else if (arg == "--curvature-min-scale") o.curvature_min_scale = parse_float(arg, value);
         else if (arg == "--fluffiness") o.fluffiness_deg = parse_float(arg, value);
+        else if (arg == "--shaft-segments") o.shaft_segments = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
+        else if (arg == "--bend-limit") o.bend_limit_deg = parse_float(arg, value);
         else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--validate") {
             const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});
@@ -226,7 +232,8 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
-        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
+        else if (arg == "--poses") o.poses = value;
+        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
     for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map}) {

@@ -38,6 +38,8 @@ struct Options {
     std::optional<uint32_t> mode;
     std::optional<float> drift_tolerance_deg;
     std::optional<float> curvature_min_scale;
+    std::optional<uint32_t> shaft_segments;
+    std::optional<float> bend_limit_deg;
     std::optional<float> fluffiness_deg;
     std::optional<uint32_t> threads;
     // Per-vertex maps from vertex attributes (glTF input only).
@@ -48,6 +50,7 @@ struct Options {
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;
     std::string report;
+    std::string poses;  // --poses FILE: the rest mesh, config, maps and frames handed to the library
     bool help = false;
     bool version = false;
 };

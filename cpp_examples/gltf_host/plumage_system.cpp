@@ -81,6 +81,28 @@ std::vector<float> feather_triangles(const PlumageSystem& sys) {
     return copy_out(&plumage_system_feather_triangles, sys, "plumage_system_feather_triangles");
 }
 
+FeatherMeshData feather_mesh(const PlumageSystem& sys) {
+    PlumageFeatherGeometry g;
+    plumage_feather_geometry_init(&g);
+    check(plumage_system_feather_geometry(&sys, &g), &sys, "plumage_system_feather_geometry");
+    FeatherMeshData m;
+    const size_t nv = static_cast<size_t>(g.vertex_count), nt = static_cast<size_t>(g.triangle_count), nf = static_cast<size_t>(g.feather_count);
+    m.positions.resize(3 * nv);
+    m.normals.resize(3 * nv);
+    m.uvs.resize(2 * nv);
+    m.indices.resize(3 * nt);
+    m.vertex_counts.resize(nf);
+    m.placed.resize(nf);
+    g.positions = m.positions.data(), g.positions_capacity = m.positions.size();
+    g.normals = m.normals.data(), g.normals_capacity = m.normals.size();
+    g.uvs = m.uvs.data(), g.uvs_capacity = m.uvs.size();
+    g.indices = m.indices.data(), g.indices_capacity = m.indices.size();
+    g.vertex_counts = m.vertex_counts.data(), g.vertex_counts_capacity = m.vertex_counts.size();
+    g.placed = m.placed.data(), g.placed_capacity = m.placed.size();
+    check(plumage_system_feather_geometry(&sys, &g), &sys, "plumage_system_feather_geometry");
+    return m;
+}
+
 std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys) {
     return stats_query(&plumage_system_sampling_stats, sys, "plumage_system_sampling_stats");
 }

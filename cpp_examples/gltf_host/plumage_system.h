@@ -54,6 +54,18 @@ SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& p
 std::vector<PlumageFeather> feathers(const PlumageSystem& sys);
 std::vector<float> feather_triangles(const PlumageSystem& sys);
 
+// Every feather as a mesh (plumage_system_feather_geometry): feather after
+// feather in the order of feathers(), each with vertex_counts[f] vertices.
+struct FeatherMeshData {
+    std::vector<float> positions;         // xyz per vertex
+    std::vector<float> normals;           // xyz per vertex, unit, away from the skin
+    std::vector<float> uvs;               // (u along the shaft, v across the vanes) per vertex
+    std::vector<uint32_t> indices;        // three per triangle, into the whole vertex array
+    std::vector<uint32_t> vertex_counts;  // per feather
+    std::vector<uint8_t> placed;          // per feather: 0 when left out (collapsed to its root)
+};
+FeatherMeshData feather_mesh(const PlumageSystem& sys);
+
 // Figures the library has computed; std::nullopt when it answers NOT_AVAILABLE.
 std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys);
 std::optional<PlumageOrderingStats> ordering_stats(const PlumageSystem& sys);

@@ -101,6 +101,8 @@ json config_to_json(const PlumageConfig& c) {
               {"theta_s", tidy(c.theta_s)},
               {"drift_tolerance", tidy(c.drift_tolerance)},
               {"curvature_min_scale", tidy(c.curvature_min_scale)},
+              {"shaft_segments", c.shaft_segments},
+              {"bend_limit", tidy(c.bend_limit)},
               {"flow_axis", {tidy(c.flow_axis[0]), tidy(c.flow_axis[1]), tidy(c.flow_axis[2])}},
               {"recompute_neighbourhoods", c.recompute_neighbourhoods != 0}};
     if (c.flow_source_enabled != 0)

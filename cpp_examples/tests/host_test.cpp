@@ -566,6 +566,34 @@ int library_error() {
     return 0;
 }
 
+// --poses: the library's input for other programs (layout in gltf_host/pose_writer.h;
+// the Python package's tests read it back and compare with the .glb).
+int poses() {
+    const std::string file = path("run.poses");
+    const Run r = run_host({"--model-resolution", "20,16", "--frames", "2", "--feathers", "300", "--validate", "none", "--poses", file});
+    CHECK_MSG(r.exit_code == 0, r.err);
+    CHECK(r.out.find("wrote " + file) != std::string::npos);
+    const std::string bytes = slurp(file);
+    CHECK(bytes.size() > 56 && bytes.compare(0, 8, std::string("PLMPOSE\0", 8)) == 0);
+    if (bytes.size() <= 56) return 0;
+    uint32_t version = 0, config_size = 0;
+    uint64_t counts[3] = {};
+    double fps = 0;
+    uint32_t maps = 1;
+    std::memcpy(&version, bytes.data() + 8, 4);
+    std::memcpy(&config_size, bytes.data() + 12, 4);
+    std::memcpy(counts, bytes.data() + 16, 24);
+    std::memcpy(&fps, bytes.data() + 40, 8);
+    std::memcpy(&maps, bytes.data() + 48, 4);
+    const uint64_t nv = 19 * 17 + 2, nt = 2 * 16 * 18, nf = 2;
+    CHECK(version == 1 && config_size >= 100 && counts[0] == nv && counts[1] == nt && counts[2] == nf && fps == 30 && maps == 0);
+    CHECK(bytes.size() == 56 + config_size + 12 * nv + 12 * nt + 8 * nf + 12 * nv * nf);
+    std::ofstream(path("plain_file")) << "x";  // a file where a directory should be
+    EXPECT_REFUSAL(run_host({"--frames", "1", "--poses", path("plain_file") + "/x.poses"}), 1, "cannot write");
+    EXPECT_REFUSAL(run_host({"--frames", "1", "--poses="}), 2, "--poses: empty value");
+    return 0;
+}
+
 int help() {
     const Run r = run_host({"--help"});
     CHECK(r.exit_code == 0 && r.out.find("usage: plumage_gltf") != std::string::npos && r.err.empty());
@@ -594,6 +622,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"unknown_mesh_in_file", unknown_mesh_in_file},
     {"library_error", library_error},
     {"help", help},
+    {"poses", poses},
 };
 
 }  // namespace

@@ -38,14 +38,47 @@ std::vector<PlumageFeather> feathers(const std::vector<uint64_t>& ids) {
     return out;
 }
 
-// Feather f as the library gives it: (root, left, tip) and (root, tip, right), lifted by `lift`.
-std::vector<float> kites(size_t count, float lift, bool degenerate_last = false) {
-    std::vector<float> out;
+// `count` kites as the library's geometry copy-out gives them: per feather
+// root, tip, left and right corners (4 vertices), triangles (root, tip,
+// left) and (root, right, tip), feather f at x = 2f, lifted by `lift`.
+FeatherMeshData kites(size_t count, float lift) {
+    FeatherMeshData m;
     for (size_t f = 0; f < count; ++f) {
         const float x = static_cast<float>(f) * 2, y = lift;
-        const float tip_x = degenerate_last && f + 1 == count ? x : x + 1;
-        const float root[3] = {x, y, 0}, left[3] = {x + 0.5f, y + 0.25f, 0}, tip[3] = {tip_x, y, 0}, right[3] = {x + 0.5f, y - 0.25f, 0};
-        for (const float* c : {root, left, tip, root, tip, right}) out.insert(out.end(), c, c + 3);
+        const float corners[4][3] = {{x, y, 0}, {x + 1, y, 0}, {x + 0.4f, y + 0.25f, 0}, {x + 0.4f, y - 0.25f, 0}};
+        const float uvs[4][2] = {{0, 0.5f}, {1, 0.5f}, {0.4f, 1}, {0.4f, 0}};
+        for (int c = 0; c < 4; ++c) {
+            m.positions.insert(m.positions.end(), corners[c], corners[c] + 3);
+            m.normals.insert(m.normals.end(), {0.0f, lift > 0 ? 0.6f : 0.0f, lift > 0 ? 0.8f : 1.0f});
+            m.uvs.insert(m.uvs.end(), uvs[c], uvs[c] + 2);
+        }
+        const uint32_t b = static_cast<uint32_t>(4 * f);
+        m.indices.insert(m.indices.end(), {b, b + 1, b + 2, b, b + 3, b + 1});
+        m.vertex_counts.push_back(4);
+        m.placed.push_back(1);
+    }
+    return m;
+}
+
+// The triangle corners of `m`, 9 floats per triangle.
+std::vector<float> kite_corners(const FeatherMeshData& m) {
+    std::vector<float> out;
+    for (uint32_t i : m.indices) out.insert(out.end(), m.positions.begin() + 3 * i, m.positions.begin() + 3 * i + 3);
+    return out;
+}
+
+// Feathers `keep` (in that order) of `m`.
+FeatherMeshData pick(const FeatherMeshData& m, const std::vector<size_t>& keep) {
+    FeatherMeshData out;
+    for (size_t f : keep) {
+        const long v = static_cast<long>(4 * f);
+        out.positions.insert(out.positions.end(), m.positions.begin() + 3 * v, m.positions.begin() + 3 * v + 12);
+        out.normals.insert(out.normals.end(), m.normals.begin() + 3 * v, m.normals.begin() + 3 * v + 12);
+        out.uvs.insert(out.uvs.end(), m.uvs.begin() + 2 * v, m.uvs.begin() + 2 * v + 8);
+        const uint32_t b = static_cast<uint32_t>(out.vertex_counts.size() * 4);
+        out.indices.insert(out.indices.end(), {b, b + 1, b + 2, b, b + 3, b + 1});
+        out.vertex_counts.push_back(4);
+        out.placed.push_back(1);
     }
     return out;
 }
@@ -61,7 +94,7 @@ tinygltf::Model read_back(const std::string& file) {
 std::vector<float> floats(const tinygltf::Model& m, int accessor) {
     const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(accessor)];
     const tinygltf::BufferView& v = m.bufferViews[static_cast<size_t>(a.bufferView)];
-    std::vector<float> out(a.count * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1));
+    std::vector<float> out(a.count * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : a.type == TINYGLTF_TYPE_VEC2 ? 2 : 1));
     std::memcpy(out.data(), m.buffers[0].data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(float));
     return out;
 }
@@ -109,7 +142,7 @@ size_t vertex_count(const tinygltf::Model& m, size_t mesh) {
 
 // ---- the .glb -----------------------------------------------------------
 
-void glb_four_vertices_per_feather() {
+void glb_layout_and_frames() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({10, 11, 12}), kites(3, 0));
     std::vector<float> moved = kBody;
     moved[1] = 0.5f;
@@ -118,10 +151,10 @@ void glb_four_vertices_per_feather() {
     rec.write_glb(path("four.glb"));
     const tinygltf::Model m = read_back(path("four.glb"));
     CHECK(m.meshes.size() == 2 && m.meshes[1].name == "feathers");
-    CHECK(vertex_count(m, 1) == 12);  // root, left, tip, right
-    CHECK(near(corners(m, 1, -1), kites(3, 0)));
-    CHECK(near(corners(m, 1, 0), kites(3, 1)));
-    CHECK(near(corners(m, 1, 1), kites(3, 2)));
+    CHECK(vertex_count(m, 1) == 12);  // the library's shared vertices
+    CHECK(near(corners(m, 1, -1), kite_corners(kites(3, 0))));
+    CHECK(near(corners(m, 1, 0), kite_corners(kites(3, 1))));
+    CHECK(near(corners(m, 1, 1), kite_corners(kites(3, 2))));
     CHECK(near(corners(m, 0, 1), moved));
     CHECK(m.animations.size() == 1 && m.animations[0].samplers[0].interpolation == "STEP");
     const std::vector<float> times = floats(m, m.animations[0].samplers[0].input);
@@ -130,35 +163,40 @@ void glb_four_vertices_per_feather() {
     CHECK((weights == std::vector<float>{1, 0, 0, 1}));  // frame k shows target k alone
 }
 
-void glb_six_vertex_fallback() {
-    // A feather whose tip meets its root in one frame breaks the shared corner pattern.
-    AnimationRecorder rec(kBody, kBodyIndices, feathers({1, 2}), kites(2, 0));
-    rec.add_frame(0.0, kBody, feathers({1, 2}), kites(2, 1, true));
-    rec.write_glb(path("six.glb"));
-    const tinygltf::Model m = read_back(path("six.glb"));
-    CHECK(vertex_count(m, 1) == 12);
-    CHECK(near(corners(m, 1, 0), kites(2, 1, true)));
+void glb_feather_attributes() {
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({10, 11, 12}), kites(3, 0));
+    rec.add_frame(0.0, kBody, feathers({10, 11, 12}), kites(3, 1));
+    rec.write_glb(path("attributes.glb"));
+    const tinygltf::Model m = read_back(path("attributes.glb"));
+    const tinygltf::Primitive& p = m.meshes[1].primitives[0];
+    for (const char* key : {"POSITION", "NORMAL", "TEXCOORD_0", "_FEATHER_ID"}) check(p.attributes.count(key) == 1, key, __LINE__);
+    CHECK(p.attributes.count("NORMAL") == 1 && m.meshes[0].primitives[0].attributes.count("NORMAL") == 0);
+    const std::vector<float> normals = floats(m, p.attributes.at("NORMAL"));
+    const std::vector<float> uvs = floats(m, p.attributes.at("TEXCOORD_0"));
+    const std::vector<float> ids = floats(m, p.attributes.at("_FEATHER_ID"));
+    CHECK(normals == kites(3, 0).normals && uvs == kites(3, 0).uvs);
+    CHECK((ids == std::vector<float>{0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2}));
+    // Frame 0's target moves the normals too.
+    CHECK(p.targets.size() == 1 && p.targets[0].count("NORMAL") == 1);
+    std::vector<float> moved = floats(m, p.targets[0].at("NORMAL"));
+    for (size_t i = 0; i < moved.size(); ++i) moved[i] += normals[i];
+    CHECK(near(moved, kites(3, 1).normals));
 }
 
 void glb_feathers_matched_by_id() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
     // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
-    std::vector<float> reversed;
-    const std::vector<float> lifted = kites(3, 1);
-    for (size_t f = 3; f-- > 0;) reversed.insert(reversed.end(), lifted.begin() + static_cast<long>(18 * f), lifted.begin() + static_cast<long>(18 * f + 18));
-    const std::vector<float> extra = kites(1, 40);
-    reversed.insert(reversed.end(), extra.begin(), extra.end());
-    rec.add_frame(0.0, kBody, feathers({9, 8, 7, 99}), reversed);
+    const FeatherMeshData lifted = kites(4, 1);
+    rec.add_frame(0.0, kBody, feathers({9, 8, 7, 99}), pick(lifted, {2, 1, 0, 3}));
     // Frame 1 lacks feather 8: it keeps its last pose.
-    std::vector<float> partial = kites(3, 2);
-    partial.erase(partial.begin() + 18, partial.begin() + 36);
-    rec.add_frame(1.0, kBody, feathers({7, 9}), partial);
+    rec.add_frame(1.0, kBody, feathers({7, 9}), pick(kites(3, 2), {0, 2}));
     CHECK(rec.untracked_feathers() == 1);
     rec.write_glb(path("by_id.glb"));
     const tinygltf::Model m = read_back(path("by_id.glb"));
-    CHECK(near(corners(m, 1, 0), lifted));
-    std::vector<float> expected = kites(3, 2);
-    std::copy(lifted.begin() + 18, lifted.begin() + 36, expected.begin() + 18);
+    CHECK(near(corners(m, 1, 0), kite_corners(pick(lifted, {0, 1, 2}))));
+    std::vector<float> expected = kite_corners(kites(3, 2));
+    const std::vector<float> kept = kite_corners(pick(lifted, {1}));
+    std::copy(kept.begin(), kept.end(), expected.begin() + 18);
     CHECK(near(corners(m, 1, 1), expected));
 }
 
@@ -267,8 +305,8 @@ void report_memory() {
 }
 
 const std::map<std::string, std::function<void()>> kCases = {
-    {"glb_four_vertices_per_feather", glb_four_vertices_per_feather},
-    {"glb_six_vertex_fallback", glb_six_vertex_fallback},
+    {"glb_layout_and_frames", glb_layout_and_frames},
+    {"glb_feather_attributes", glb_feather_attributes},
     {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
     {"glb_rest_only", glb_rest_only},
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},

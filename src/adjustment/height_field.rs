@@ -32,7 +32,7 @@
 //! their highest corner in every cell of their bounding box.
 
 use crate::body::{Aabb, BodyIndex};
-use crate::feather::FeatherShape;
+use crate::feather::{FeatherShape, FeatherTriangles};
 use crate::geometry::RootFrame;
 use glam::{Mat3A, Vec2, Vec3, Vec3A};
 
@@ -158,7 +158,7 @@ pub struct HeightField {
     pub(crate) sweep_obstacles: Vec<u32>,
     /// The rasterised obstacles' triangles in the root frame (kept for
     /// the refills of one feather's smaller sizes).
-    pub(crate) local_obstacles: Vec<[[Vec3; 3]; 2]>,
+    pub(crate) local_obstacles: Vec<FeatherTriangles>,
 }
 
 impl HeightField {
@@ -174,7 +174,7 @@ impl HeightField {
             socket_x: 0.0,
             body_floor: -1.0,
             clearance_from: 0.0,
-            shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5 },
+            shape: FeatherShape { length: 1.0, width: 1.0, thickness: 0.0, vane_split: 0.5, segments: 1 },
             obstacle: Vec::new(),
             body: Vec::new(),
             need: Vec::new(),
@@ -291,26 +291,29 @@ impl HeightField {
         self.body[j * self.u + i]
     }
 
-    /// Rasterises an obstacle feather's two world triangles, raised by its
+    /// Rasterises an obstacle feather's world triangles, raised by its
     /// thickness. Returns whether any cell was touched (one collision test).
-    pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]; 2], thickness: f32) -> bool {
+    pub fn add_obstacle(&mut self, frame: &RootFrame, triangles: &[[Vec3; 3]], thickness: f32) -> bool {
         self.add_local_obstacle(&LocalMap::new(frame).triangles(triangles), thickness)
     }
 
     /// [`HeightField::add_obstacle`] with the triangles already in the
     /// root frame's local coordinates.
-    pub(crate) fn add_local_obstacle(&mut self, local: &[[Vec3; 3]; 2], thickness: f32) -> bool {
-        let [a, b] = *local;
-        // Both triangles at once against the footprint first (most
+    pub(crate) fn add_local_obstacle(&mut self, local: &[[Vec3; 3]], thickness: f32) -> bool {
+        // All triangles at once against the footprint first (most
         // candidates within reach miss it).
-        let lo = a[0].min(a[1]).min(a[2]).min(b[0]).min(b[1]).min(b[2]);
-        let hi = a[0].max(a[1]).max(a[2]).max(b[0]).max(b[1]).max(b[2]);
+        let corners = || local.iter().flatten().copied();
+        let lo = corners().fold(Vec3::INFINITY, Vec3::min);
+        let hi = corners().fold(Vec3::NEG_INFINITY, Vec3::max);
         let (x_hi, y_hi) = (self.shape.length + self.dx, -self.y_min);
         if hi.x < self.socket_x || lo.x > x_hi || hi.y < self.y_min || lo.y > y_hi || hi.z + thickness <= self.floor {
             return false;
         }
-        let first = self.rasterise(Layer::Obstacle, a, thickness);
-        self.rasterise(Layer::Obstacle, b, thickness) | first
+        let mut touched = false;
+        for &t in local {
+            touched |= self.rasterise(Layer::Obstacle, t, thickness);
+        }
+        touched
     }
 
     /// Rasterises the body triangles near the feather (those facing its
@@ -485,10 +488,12 @@ impl LocalMap {
         t.map(|p| self.point(p))
     }
 
-    /// A feather's two world triangles in local coordinates.
+    /// A feather's world triangles in local coordinates.
     #[inline]
-    pub(crate) fn triangles(&self, t: &[[Vec3; 3]; 2]) -> [[Vec3; 3]; 2] {
-        [self.triangle(&t[0]), self.triangle(&t[1])]
+    pub(crate) fn triangles(&self, t: &[[Vec3; 3]]) -> FeatherTriangles {
+        let mut local = FeatherTriangles::from_slice(t);
+        local.map_in_place(|p| self.point(p));
+        local
     }
 }
 
@@ -632,7 +637,7 @@ mod tests {
     use super::*;
 
     fn field() -> (HeightField, RootFrame) {
-        let shape = FeatherShape { length: 3.1, width: 1.4, thickness: 0.05, vane_split: 0.4 };
+        let shape = FeatherShape { length: 3.1, width: 1.4, thickness: 0.05, vane_split: 0.4, segments: 1 };
         let mut f = HeightField::new(32, 16);
         f.reset(&shape, -0.35);
         (f, RootFrame::from_normal_and_direction(Vec3::ZERO, Vec3::Z, Vec3::X).unwrap())

@@ -12,7 +12,7 @@
 use super::steps::{BoxesOf, ObstacleBoxes, ObstacleReach, adjust_feather_boxed, bounding_sphere, pose_is_clear_boxed};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
 use glam::Vec3;
@@ -152,7 +152,7 @@ struct Worker {
 /// nothing it holds grows unless the feather count or thread count does.
 #[derive(Clone, Debug, Default)]
 pub struct Adjuster {
-    triangles: Vec<[[Vec3; 3]; 2]>,
+    triangles: Vec<FeatherTriangles>,
     /// A bounding sphere of each feather's triangles (centre, radius).
     spheres: Vec<(Vec3, f32)>,
     /// Each feather's triangles and raised top with their boxes, as the
@@ -206,7 +206,7 @@ impl Adjuster {
     }
 
     /// Every feather's two triangles at the poses left by the last call.
-    pub fn triangles(&self) -> &[[[Vec3; 3]; 2]] {
+    pub fn triangles(&self) -> &[FeatherTriangles] {
         &self.triangles
     }
 
@@ -469,7 +469,7 @@ impl Adjuster {
 
     /// Every feather's triangles at its current pose, and their spheres.
     fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
-        self.triangles.resize(frames.len(), [[Vec3::ZERO; 3]; 2]);
+        self.triangles.resize(frames.len(), FeatherTriangles::kite([[Vec3::ZERO; 3]; 2]));
         self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
         self.boxes.resize(frames.len(), unset);
@@ -617,7 +617,7 @@ struct Marks<'a> {
 /// Every feather's triangles at its current pose and a sphere around them.
 #[derive(Clone, Copy)]
 struct Posed<'a> {
-    triangles: &'a [[[Vec3; 3]; 2]],
+    triangles: &'a [FeatherTriangles],
     spheres: &'a [(Vec3, f32)],
     boxes: &'a [ObstacleBoxes],
 }

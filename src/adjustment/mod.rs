@@ -28,8 +28,7 @@ pub use levels::{AdjustStats, Adjuster, CandidateLists, Selection, adjust_in_ord
 pub use steps::adjust_feather;
 
 use crate::config::Config;
-use crate::feather::FeatherPose;
-use glam::Vec3;
+use crate::feather::{FeatherPose, FeatherTriangles};
 
 /// Default clearance kept between a feather and an obstacle's top, as a
 /// fraction of the adjusted feather's thickness.
@@ -48,6 +47,10 @@ pub(crate) const DEFAULT_MAX_ROLL: f32 = 0.6;
 /// Default smallest size a feather is shortened to (fraction of its shape)
 /// when it cannot lie down within the pitch limit.
 pub(crate) const DEFAULT_MIN_SCALE: f32 = 0.15;
+/// Default largest bend at a joint of a segmented shaft (radians, about
+/// 23°): three joints then curl a feather by up to about 70°, round a
+/// body or a wing's rim, while each segment stays visibly straight.
+pub const DEFAULT_BEND_LIMIT: f32 = 0.4;
 
 /// Parameters of the height-field adjustment.
 #[derive(Clone, Debug, PartialEq)]
@@ -75,6 +78,9 @@ pub struct AdjustParams {
     /// Smallest size, as a fraction of the feather's shape, that a feather
     /// needing more than `max_pitch` is shortened to (1 = never shorten).
     pub min_scale: f32,
+    /// Largest bend at a joint of a segmented shaft, radians (≥ 0; 0 keeps
+    /// every feather straight).
+    pub bend_limit: f32,
 }
 
 impl Default for AdjustParams {
@@ -90,6 +96,7 @@ impl Default for AdjustParams {
             max_pitch: DEFAULT_MAX_PITCH,
             max_roll: DEFAULT_MAX_ROLL,
             min_scale: DEFAULT_MIN_SCALE,
+            bend_limit: DEFAULT_BEND_LIMIT,
         }
     }
 }
@@ -103,6 +110,7 @@ impl AdjustParams {
             height_field_v: config.height_field_v,
             fluffiness: config.fluffiness,
             collision_allowance: config.collision_allowance,
+            bend_limit: config.bend_limit,
             ..Self::default()
         }
     }
@@ -121,8 +129,8 @@ pub enum AdjustSteps {
 /// An already placed feather as seen by the one being adjusted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObstacleFeather {
-    /// Its two triangles in world space (see [`crate::feather::feather_triangles`]).
-    pub triangles: [[Vec3; 3]; 2],
+    /// Its triangles in world space (see [`crate::feather::feather_triangles`]).
+    pub triangles: FeatherTriangles,
     /// Its thickness: its top lies this far above its triangles.
     pub thickness: f32,
     /// Whether it grows from the far side of a thin part (its normal turned

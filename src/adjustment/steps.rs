@@ -30,7 +30,7 @@
 use super::height_field::{GridExtent, JUDGE_FRACTION, LocalMap, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::{Aabb, BodyIndex};
-use crate::feather::{FeatherPose, FeatherShape};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_JOINTS, MAX_TRIANGLES, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::{BoxedTriangles, FeatherBoxes};
 use glam::Vec3;
@@ -99,9 +99,159 @@ pub fn adjust_feather(
 }
 
 /// [`adjust_feather`] with the obstacles' [`ObstacleBoxes`] made already
-/// (`boxes` lists them in the order of `obstacles`).
+/// (`boxes` lists them in the order of `obstacles`): the straight feather's
+/// pose by the height field (and the exact checks), then, for a segmented
+/// shaft, its drape (see [`drape`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn adjust_feather_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    previous: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+    scratch: &mut HeightField,
+) -> AdjustOutcome {
+    let straight = straight_pose(frame, shape, previous, obstacles, boxes, body, params, steps, scratch);
+    if shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
+        return straight;
+    }
+    AdjustOutcome { pose: drape(frame, shape, straight.pose, boxes, body, params, scratch), ..straight }
+}
+
+/// Angle steps (radians) of the descent of a segment in [`drape`]; the
+/// first contact found is then narrowed by [`DRAPE_BISECTIONS`] halvings
+/// (to about 0.4°).
+const DRAPE_STEP: f32 = 0.1;
+/// Halvings of the last step of a descent.
+const DRAPE_BISECTIONS: usize = 4;
+
+/// Drapes a segmented feather (DESIGN.md §4, bending). The straight pose
+/// gives the roll and an upper bound on the root segment's pitch (the
+/// whole straight feather is clear there); then segment by segment from
+/// the root, each takes the lowest angle at which it is clear by the
+/// exact checks (the obstacles, their raised tops, and the body), coming
+/// down from above in steps so that it settles on what lies beneath it
+/// rather than passing through to a clear place below. Only the segments
+/// placed so far are checked: a later segment starts where the one before
+/// it ends and finds its own angle. The root segment may come down to the
+/// lowest pitch; every later one turns within the bend limit of the one
+/// before it, up or down. So an obstacle near the root no longer lifts
+/// the whole feather: past it, the feather bends down again.
+fn drape(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    straight: FeatherPose,
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    scratch: &mut HeightField,
+) -> FeatherPose {
+    let mut pose = straight;
+    let mut hints = CheckHints::default();
+    let segments = shape.segment_count();
+    let mut clear = |pose: FeatherPose, segment: usize, scratch: &mut HeightField| {
+        prefix_check(frame, shape, pose, segment, boxes, body, scratch, &mut hints)
+    };
+    pose.pitch = descend(straight.pitch, params.min_pitch, |pitch| {
+        let mut lowered = pose;
+        lowered.pitch = pitch;
+        clear(lowered, 0, scratch)
+    })
+    .unwrap_or(straight.pitch);
+    for segment in 1..segments {
+        let joint = segment - 1;
+        let limit = params.bend_limit;
+        let settled = descend(limit, -limit, |bend| {
+            let mut bent = pose;
+            bent.bends[joint] = bend;
+            clear(bent, segment, scratch)
+        });
+        // No angle within the limits clears this segment: the rest of the
+        // feather stays as the straight pose had it, which was clear.
+        let Some(bend) = settled else {
+            return straight;
+        };
+        pose.bends[joint] = bend;
+    }
+    pose
+}
+
+/// The lowest angle from `high` down to `low` at which `clear` holds,
+/// coming down from `high` in [`DRAPE_STEP`]s and stopping before the
+/// first that fails, then narrowing that step by halving. `None` when
+/// `high` itself fails.
+fn descend(high: f32, low: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f32> {
+    if !clear(high) {
+        return None;
+    }
+    let mut above = high;
+    loop {
+        let below = (above - DRAPE_STEP).max(low);
+        if below >= above {
+            return Some(above);
+        }
+        if !clear(below) {
+            let mut failed = below;
+            for _ in 0..DRAPE_BISECTIONS {
+                let mid = 0.5 * (above + failed);
+                if clear(mid) {
+                    above = mid;
+                } else {
+                    failed = mid;
+                }
+            }
+            return Some(above);
+        }
+        above = below;
+    }
+}
+
+/// The exact check of the segments up to `segment` (from the root) of a
+/// posed feather: their triangles meet no obstacle and no obstacle's
+/// raised top, and do not cross the body beyond the root socket.
+#[allow(clippy::too_many_arguments)]
+fn prefix_check(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    segment: usize,
+    obstacles: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    hints: &mut CheckHints,
+) -> bool {
+    let all = feather_triangles(frame, shape, pose);
+    let mine = FeatherBoxes::new(&segment_prefix(&all, shape, segment));
+    if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
+        return false;
+    }
+    let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
+    if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
+        return false;
+    }
+    !meets_obstacle(&mine, obstacles, true, &mut hints.top)
+}
+
+/// The triangles of segments `0..=segment` of a segmented feather, from
+/// its triangles in the order of [`feather_triangles`] (per vane, the
+/// fans of its [`ShaftPlan`](crate::feather::ShaftPlan) from the root).
+fn segment_prefix(all: &[[Vec3; 3]], shape: &FeatherShape, segment: usize) -> FeatherTriangles {
+    let plan = shape.shaft_plan();
+    let per_vane = plan.triangles_per_vane();
+    let end = plan.triangles_per_vane_up_to(segment);
+    let mut prefix = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+    prefix[..end].copy_from_slice(&all[..end]);
+    prefix[end..2 * end].copy_from_slice(&all[per_vane..per_vane + end]);
+    FeatherTriangles::from_slice(&prefix[..2 * end])
+}
+
+/// The straight feather's pose (all joints unbent): the three steps on the
+/// height field, each pose checked exactly, shortening where no pose fits.
+#[allow(clippy::too_many_arguments)]
+fn straight_pose(
     frame: &RootFrame,
     shape: &FeatherShape,
     previous: FeatherPose,
@@ -234,7 +384,7 @@ fn exact_pitch_sweep(
             if pitch > max_pitch {
                 break;
             }
-            let pose = FeatherPose { pitch, roll: 0.0, scale };
+            let pose = FeatherPose { pitch, roll: 0.0, scale, bends: [0.0; MAX_JOINTS] };
             if exact_check(frame, shape, pose, near, body, scratch, true, hints) {
                 found = Some(pose);
                 break 'sizes;
@@ -293,11 +443,18 @@ impl ObstacleReach {
     }
 }
 
-/// A sphere around a feather's two triangles: centre and radius.
-pub(crate) fn bounding_sphere(triangles: &[[Vec3; 3]; 2]) -> (Vec3, f32) {
-    let [[root, tip, left], [_, right, _]] = *triangles;
-    let centre = 0.25 * (root + tip + left + right);
-    let radius = [root, tip, left, right].iter().map(|p| (*p - centre).length()).fold(0.0f32, f32::max);
+/// A sphere around a feather's triangles: centre and radius. For the kite
+/// the centre is the mean of its four corners; for a segmented feather the
+/// mean of every triangle corner.
+pub(crate) fn bounding_sphere(triangles: &[[Vec3; 3]]) -> (Vec3, f32) {
+    if let [[root, tip, left], [_, right, _]] = *triangles {
+        let centre = 0.25 * (root + tip + left + right);
+        let radius = [root, tip, left, right].iter().map(|p| (*p - centre).length()).fold(0.0f32, f32::max);
+        return (centre, radius);
+    }
+    let corners = || triangles.iter().flatten().copied();
+    let centre = corners().sum::<Vec3>() / (3 * triangles.len()).max(1) as f32;
+    let radius = corners().map(|p| (p - centre).length()).fold(0.0f32, f32::max);
     (centre, radius)
 }
 
@@ -351,7 +508,7 @@ pub(crate) struct ObstacleBoxes {
 
 impl ObstacleBoxes {
     /// The boxes of an obstacle with these triangles and thickness.
-    pub(crate) fn new(triangles: &[[Vec3; 3]; 2], thickness: f32) -> Self {
+    pub(crate) fn new(triangles: &[[Vec3; 3]], thickness: f32) -> Self {
         let top = raised_top(triangles, thickness);
         Self { triangles: BoxedTriangles::new(triangles), top: BoxedTriangles::new(&top) }
     }
@@ -457,12 +614,16 @@ fn exact_check(
 /// of every obstacle's top (tested in [`exact_check`]) and passing
 /// [`pose_is_clear`] stays out of the slab an obstacle fills, except for
 /// parts that end inside it.
-fn raised_top(triangles: &[[Vec3; 3]; 2], thickness: f32) -> [[Vec3; 3]; 2] {
-    let raise = |t: [Vec3; 3]| {
+fn raised_top(triangles: &[[Vec3; 3]], thickness: f32) -> FeatherTriangles {
+    let raise = |t: &[Vec3; 3]| {
         let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * thickness;
         [t[0] + n, t[1] + n, t[2] + n]
     };
-    [raise(triangles[0]), raise(triangles[1])]
+    let mut top = FeatherTriangles::from_slice(triangles);
+    for (t, raised) in top.iter_mut().zip(triangles.iter().map(raise)) {
+        *t = raised;
+    }
+    top
 }
 
 /// Clears `field` over `shape`'s footprint and rasterises the obstacles and

@@ -13,6 +13,9 @@ mod pose;
 mod shape;
 
 pub use mesh::{FeatherMesh, FeatherMeshLayout};
-pub use pose::{FeatherPose, feather_normal, feather_triangles, shaft_direction, tip_position};
-pub use shape::FeatherShape;
+pub use pose::{
+    FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, shaft_direction, tip_position,
+    triangles_per_feather,
+};
 pub(crate) use shape::LENGTH_PER_SPACING;
+pub use shape::{FeatherShape, MAX_JOINTS, MAX_SEGMENTS, MAX_STATIONS, ShaftPlan};

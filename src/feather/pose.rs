@@ -7,8 +7,14 @@
 //! pitched shaft, which is what "roll about the shaft" means.
 
 use super::FeatherShape;
+use super::shape::{MAX_JOINTS, MAX_SEGMENTS, ShaftPlan};
 use crate::geometry::RootFrame;
 use glam::Vec3;
+
+/// Most triangles of a posed feather: per vane, every interior joint's
+/// station counts in the fans of both its segments, the vane corners in one
+/// (see [`ShaftPlan`]).
+pub const MAX_TRIANGLES: usize = 2 * (2 * MAX_SEGMENTS - 1);
 
 /// The adjustable state of a feather: two angles (radians) and a size.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,6 +28,12 @@ pub struct FeatherPose {
     /// limb, a flow sink) is shortened instead of standing up
     /// (see [`FeatherShape::scaled`]).
     pub scale: f32,
+    /// Bend at each joint of a segmented shaft (radians, joint 1 first):
+    /// the turn of each segment relative to the one before it, about the
+    /// feather's own lateral axis; negative curves the feather down towards
+    /// the skin. Only the first `S − 1` are used; all 0 is a straight
+    /// feather.
+    pub bends: [f32; MAX_JOINTS],
 }
 
 impl Default for FeatherPose {
@@ -33,7 +45,13 @@ impl Default for FeatherPose {
 impl FeatherPose {
     /// A full-size pose from pitch and roll.
     pub fn new(pitch: f32, roll: f32) -> Self {
-        Self { pitch, roll, scale: 1.0 }
+        Self { pitch, roll, scale: 1.0, bends: [0.0; MAX_JOINTS] }
+    }
+
+    /// Whether no joint is bent (the feather is one plane).
+    #[inline]
+    pub fn is_straight(&self) -> bool {
+        self.bends.iter().all(|&b| b == 0.0)
     }
 
     /// The same angles at size `scale`.
@@ -81,13 +99,157 @@ pub fn feather_normal(frame: &RootFrame, pose: FeatherPose) -> Vec3 {
     frame.tangent * local.x + frame.binormal * local.y + frame.normal * local.z
 }
 
-/// The feather's two triangles in world space: `[root, tip, +y corner]` and
-/// `[root, −y corner, tip]`. Both wind so that their normal faces away from
-/// the skin when the feather lies flat.
-pub fn feather_triangles(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> [[Vec3; 3]; 2] {
+/// A posed feather's triangles (at most [`MAX_TRIANGLES`]), read as a
+/// slice. The kite (`S = 1`) has two: `[root, tip, +y corner]` and
+/// `[root, −y corner, tip]`. A segmented shaft has, per vane and segment
+/// from the root, the fan of [`ShaftPlan`], the +y vane's first; all wind
+/// so that their normal faces away from the skin when the feather lies
+/// flat.
+#[derive(Clone, Copy, Debug)]
+pub struct FeatherTriangles {
+    triangles: [[Vec3; 3]; MAX_TRIANGLES],
+    len: u8,
+}
+
+impl FeatherTriangles {
+    /// The kite's two triangles.
+    pub fn kite(triangles: [[Vec3; 3]; 2]) -> Self {
+        let mut all = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+        all[..2].copy_from_slice(&triangles);
+        Self { triangles: all, len: 2 }
+    }
+
+    /// Triangles from a slice (at most [`MAX_TRIANGLES`]).
+    pub fn from_slice(triangles: &[[Vec3; 3]]) -> Self {
+        let mut all = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+        all[..triangles.len()].copy_from_slice(triangles);
+        Self { triangles: all, len: triangles.len() as u8 }
+    }
+
+    /// Moves every corner by `f`.
+    #[inline]
+    pub fn map_in_place(&mut self, f: impl Fn(Vec3) -> Vec3) {
+        for t in &mut self.triangles[..self.len as usize] {
+            *t = t.map(&f);
+        }
+    }
+
+    fn push(&mut self, t: [Vec3; 3]) {
+        self.triangles[self.len as usize] = t;
+        self.len += 1;
+    }
+}
+
+impl std::ops::DerefMut for FeatherTriangles {
+    #[inline]
+    fn deref_mut(&mut self) -> &mut [[Vec3; 3]] {
+        &mut self.triangles[..self.len as usize]
+    }
+}
+
+impl PartialEq for FeatherTriangles {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}
+
+impl std::ops::Deref for FeatherTriangles {
+    type Target = [[Vec3; 3]];
+    #[inline]
+    fn deref(&self) -> &[[Vec3; 3]] {
+        &self.triangles[..self.len as usize]
+    }
+}
+
+/// Triangles per feather of `shape` (see [`FeatherTriangles`]).
+#[inline]
+pub fn triangles_per_feather(shape: &FeatherShape) -> usize {
+    match shape.segment_count() {
+        1 => 2,
+        _ => 2 * shape.shaft_plan().triangles_per_vane(),
+    }
+}
+
+/// The posed feather's triangles in world space (see [`FeatherTriangles`]).
+pub fn feather_triangles(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> FeatherTriangles {
     let rotation = pose.rotation();
-    let [root, tip, left, right] = shape.scaled(pose.scale).kite_corners().map(|p| frame.to_world(rotation.apply(p)));
-    [[root, tip, left], [root, right, tip]]
+    let scaled = shape.scaled(pose.scale);
+    if shape.segment_count() == 1 {
+        let [root, tip, left, right] = scaled.kite_corners().map(|p| frame.to_world(rotation.apply(p)));
+        return FeatherTriangles::kite([[root, tip, left], [root, right, tip]]);
+    }
+    let shaft = ShaftPoints::of(&scaled, &pose);
+    let plan = &shaft.plan;
+    let world = |p: Vec3| frame.to_world(rotation.apply(p));
+    let joint: [Vec3; MAX_SEGMENTS + 1] =
+        std::array::from_fn(|k| if k <= plan.segments { world(shaft.points[k]) } else { Vec3::ZERO });
+    let mut out = FeatherTriangles { triangles: [[Vec3::ZERO; 3]; MAX_TRIANGLES], len: 0 };
+    // +y vane, then −y vane (mirrored winding).
+    for side in [1.0f32, -1.0] {
+        let tri = |a: Vec3, b: Vec3, c: Vec3| if side > 0.0 { [a, b, c] } else { [a, c, b] };
+        for k in 0..plan.segments {
+            let mut previous = joint[k + 1];
+            for (_, f) in plan.segment_stations(k) {
+                let edge = world(shaft.edge_point(f, side));
+                out.push(tri(joint[k], previous, edge));
+                previous = edge;
+            }
+        }
+    }
+    out
+}
+
+/// The shaft polyline of a segmented feather in its unrolled, unpitched
+/// frame (x along the shaft at the root, z up), by its [`ShaftPlan`].
+/// Joint k turns the segments after it by `bends[k − 1]` about the
+/// lateral (y) axis, so every segment and its vanes stay flat.
+pub(super) struct ShaftPoints {
+    pub(super) plan: ShaftPlan,
+    length: f32,
+    half_width: f32,
+    vane_split: f32,
+    pub(super) points: [Vec3; MAX_SEGMENTS + 1],
+    directions: [Vec3; MAX_SEGMENTS],
+}
+
+impl ShaftPoints {
+    pub(super) fn of(shape: &FeatherShape, pose: &FeatherPose) -> Self {
+        let plan = shape.shaft_plan();
+        let s = plan.segments;
+        let mut points = [Vec3::ZERO; MAX_SEGMENTS + 1];
+        let mut directions = [Vec3::X; MAX_SEGMENTS];
+        let mut angle = 0.0f32;
+        for k in 0..s {
+            if k > 0 {
+                angle += pose.bends[k - 1];
+            }
+            let (sin, cos) = angle.sin_cos();
+            directions[k] = Vec3::new(cos, 0.0, sin);
+            points[k + 1] = points[k] + directions[k] * ((plan.joint(k + 1) - plan.joint(k)) * shape.length);
+        }
+        Self {
+            plan,
+            length: shape.length,
+            half_width: 0.5 * shape.width,
+            vane_split: shape.vane_split,
+            points,
+            directions,
+        }
+    }
+
+    /// The vane edge at station `f` (a fraction of the length) on side
+    /// `side` (±1 along y): on the segment holding the station, the kite's
+    /// half-width off the shaft.
+    pub(super) fn edge_point(&self, f: f32, side: f32) -> Vec3 {
+        let k = ((f * self.plan.segments as f32) as usize).min(self.plan.segments - 1);
+        let along = (f - self.plan.joint(k)) * self.length;
+        let half = if f <= self.vane_split {
+            self.half_width * f / self.vane_split
+        } else {
+            self.half_width * (1.0 - f) / (1.0 - self.vane_split)
+        };
+        self.points[k] + self.directions[k] * along + Vec3::new(0.0, side * half, 0.0)
+    }
 }
 
 /// Roll then pitch (see [`FeatherPose::apply_local`]) by their sines and
@@ -114,7 +276,11 @@ impl PoseRotation {
 /// The posed tip position in world space.
 #[inline]
 pub fn tip_position(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Vec3 {
-    frame.position + shaft_direction(frame, pose) * (shape.length * pose.scale)
+    if shape.segment_count() == 1 || pose.is_straight() {
+        return frame.position + shaft_direction(frame, pose) * (shape.length * pose.scale);
+    }
+    let shaft = ShaftPoints::of(&shape.scaled(pose.scale), &pose);
+    frame.to_world(pose.rotation().apply(shaft.points[shaft.plan.segments]))
 }
 
 #[cfg(test)]
@@ -128,7 +294,9 @@ mod tests {
     #[test]
     fn flat_feather_lies_in_the_tangent_plane() {
         let s = FeatherShape::for_spacing(1.0);
-        let [a, b] = feather_triangles(&frame(), &s, FeatherPose::default());
+        let [a, b] = *feather_triangles(&frame(), &s, FeatherPose::default()) else {
+            panic!("a kite has two triangles")
+        };
         for p in a.iter().chain(b.iter()) {
             assert!((p.z - 3.0).abs() < 1e-6);
         }
@@ -157,7 +325,7 @@ mod tests {
         let f = frame();
         let s = FeatherShape::for_spacing(0.7);
         let pose = FeatherPose::new(-0.2, 0.4);
-        let [a, b] = feather_triangles(&f, &s, pose);
+        let [a, b] = *feather_triangles(&f, &s, pose) else { panic!("a kite has two triangles") };
         assert!(((a[1] - a[0]).length() - s.length).abs() < 1e-5);
         assert!(((a[1] - a[0]).normalize() - shaft_direction(&f, pose)).length() < 1e-5);
         assert!(((a[2] - b[1]).length() - s.width).abs() < 1e-5);

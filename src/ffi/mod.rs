@@ -285,13 +285,16 @@ pub unsafe extern "C" fn plumage_system_feathers(
     })
 }
 
-/// Copies the feathers' triangles as xyz floats: two triangles (one per
-/// vane) of three corners per feather, 18 floats per feather, in the order
-/// of `plumage_system_feathers`. `capacity` and `*out_len` count floats.
-/// Corner order per feather: (root, tip, left corner), (root, right corner,
-/// tip), where "left" lies on the binormal side (normal × shaft); both
-/// triangles face away from the skin, and the root and tip corners of the
-/// two triangles are bit-identical, so a host can share them.
+/// Copies the feathers' triangles as xyz floats, in the order of
+/// `plumage_system_feathers`; `capacity` and `*out_len` count floats. A
+/// feather of one shaft segment (the default, `shaft_segments` = 1) has two
+/// triangles of three corners, 18 floats: (root, tip, left corner), (root,
+/// right corner, tip), where "left" lies on the binormal side (normal ×
+/// shaft); both face away from the skin, and the root and tip corners of
+/// the two triangles are bit-identical, so a host can share them. With S ≥ 2
+/// segments each feather has 4·S − 4 triangles (9 floats each), in the
+/// order of `plumage_system_feather_geometry`'s indices; that call also
+/// gives shared vertices, normals and UVs.
 ///
 /// # Safety
 /// `sys` is NULL or a live handle from `plumage_system_create`; other threads
@@ -305,12 +308,7 @@ pub unsafe extern "C" fn plumage_system_feather_triangles(
     capacity: usize,
     out_len: *mut usize,
 ) -> u32 {
-    with_system_ref(sys, |system| {
-        let tris = system.feather_triangles();
-        // SAFETY: [[f32; 3]; 6] is 18 contiguous f32s.
-        let flat = unsafe { std::slice::from_raw_parts(tris.as_ptr() as *const f32, tris.len() * 18) };
-        copy_out(flat, xyz, capacity, out_len)
-    })
+    with_system_ref(sys, |system| copy_out(system.feather_triangles().as_flattened(), xyz, capacity, out_len))
 }
 
 /// Fills `geometry` with NULL buffers, zero capacities and totals, and sets

@@ -99,6 +99,13 @@ pub struct PlumageConfig {
     /// closer and feathers shorter, down to this fraction. Not applied when
     /// `feather_length` is set.
     pub curvature_min_scale: f32,
+    /// Shaft segments of every feather, 1 to 4 (default 1, the rigid
+    /// kite): with more, each joint may bend, so a feather drapes over the
+    /// feathers and the skin beneath it instead of standing off them.
+    pub shaft_segments: u32,
+    /// Largest bend at each joint of a segmented shaft, radians, in
+    /// [0, 1.2] (default 0.4; 0 keeps feathers straight).
+    pub bend_limit: f32,
 }
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
@@ -241,6 +248,8 @@ impl PlumageConfig {
             flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
             drift_tolerance: c.drift_tolerance,
             curvature_min_scale: c.curvature_min_scale,
+            shaft_segments: c.shaft_segments,
+            bend_limit: c.bend_limit,
         }
     }
 
@@ -276,6 +285,7 @@ impl PlumageConfig {
             self.theta_s,
             self.drift_tolerance,
             self.curvature_min_scale,
+            self.bend_limit,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -306,6 +316,8 @@ impl PlumageConfig {
             recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
             flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
             curvature_min_scale: self.curvature_min_scale,
+            shaft_segments: self.shaft_segments,
+            bend_limit: self.bend_limit,
         };
         cfg.validate()?;
         Ok(cfg)

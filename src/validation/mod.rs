@@ -14,7 +14,7 @@ use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid};
-use crate::feather::{FeatherPose, FeatherShape, feather_normal, shaft_direction};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -51,7 +51,7 @@ pub struct Validation {
 /// `probes` probe points are drawn with `seed`.
 #[allow(clippy::too_many_arguments)]
 pub fn validate(
-    feather_triangles: &[[[Vec3; 3]; 2]],
+    feather_triangles: &[FeatherTriangles],
     frames: &[RootFrame],
     shapes: &[FeatherShape],
     poses: &[FeatherPose],
@@ -60,11 +60,11 @@ pub fn validate(
     probes: usize,
     seed: u64,
 ) -> Validation {
-    let grid = feather_grid(feather_triangles);
+    let (grid, owner) = feather_grid(feather_triangles);
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
     let coverage = count_covered(&grid, longest, skin, body, probes, seed);
     Validation {
-        intersecting_pairs: intersecting_pairs_in(&grid),
+        intersecting_pairs: intersecting_pairs_in(&grid, &owner),
         body_penetrations: body_penetrations(frames, shapes, poses, body),
         coverage: coverage.fraction(),
         probes: coverage.probes,
@@ -77,33 +77,36 @@ pub fn validate(
 /// Fraction of the probes of `skin` outside `body` whose normal ray meets
 /// one of `feather_triangles` within `reach` (see [`count_covered`]).
 pub fn coverage(
-    feather_triangles: &[[[Vec3; 3]; 2]],
+    feather_triangles: &[FeatherTriangles],
     reach: f32,
     skin: &ProbeSkin<'_>,
     body: &BodyIndex,
     probes: usize,
     seed: u64,
 ) -> f64 {
-    count_covered(&feather_grid(feather_triangles), reach, skin, body, probes, seed).fraction()
+    count_covered(&feather_grid(feather_triangles).0, reach, skin, body, probes, seed).fraction()
 }
 
-/// A grid over every feather triangle; triangle `2i + k` is triangle `k`
-/// of feather `i`.
-fn feather_grid(feather_triangles: &[[[Vec3; 3]; 2]]) -> TriangleGrid {
+/// A grid over every feather triangle, feather after feather, and the
+/// feather each grid triangle belongs to.
+fn feather_grid(feather_triangles: &[FeatherTriangles]) -> (TriangleGrid, Vec<u32>) {
     let mut grid = TriangleGrid::new();
     grid.rebuild(feather_triangles.iter().flat_map(|f| f.iter().copied()), None);
-    grid
+    let owner =
+        feather_triangles.iter().enumerate().flat_map(|(i, f)| std::iter::repeat_n(i as u32, f.len())).collect();
+    (grid, owner)
 }
 
 /// Pairs of distinct feathers whose triangles intersect (exact test, see
 /// [`triangles_intersect`]); any two feathers are compared, not only
 /// neighbours. Feathers left out (size 0, all corners at the root) meet
 /// nothing. Sorted, without repeats.
-pub fn intersecting_pairs(feather_triangles: &[[[Vec3; 3]; 2]]) -> Vec<(u32, u32)> {
-    intersecting_pairs_in(&feather_grid(feather_triangles))
+pub fn intersecting_pairs(feather_triangles: &[FeatherTriangles]) -> Vec<(u32, u32)> {
+    let (grid, owner) = feather_grid(feather_triangles);
+    intersecting_pairs_in(&grid, &owner)
 }
 
-fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
+fn intersecting_pairs_in(grid: &TriangleGrid, owner: &[u32]) -> Vec<(u32, u32)> {
     let mut pairs: Vec<(u32, u32)> = (0..grid.cell_count())
         .into_par_iter()
         .flat_map_iter(|cell| {
@@ -112,7 +115,7 @@ fn intersecting_pairs_in(grid: &TriangleGrid) -> Vec<(u32, u32)> {
             for (k, &ta) in items.iter().enumerate() {
                 let ba = grid.bounds(ta);
                 for &tb in &items[k + 1..] {
-                    let (fa, fb) = (ta / 2, tb / 2);
+                    let (fa, fb) = (owner[ta as usize], owner[tb as usize]);
                     if fa == fb {
                         continue;
                     }
@@ -153,7 +156,7 @@ fn clip_beyond_root(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
-    tris: &[[Vec3; 3]; 2],
+    tris: &[[Vec3; 3]],
     out: &mut Vec<[Vec3; 3]>,
 ) {
     out.clear();
@@ -235,7 +238,7 @@ pub(crate) fn penetrates_body_hinted(
     hint: &mut Option<u32>,
 ) -> bool {
     let tris = crate::feather::feather_triangles(frame, shape, pose);
-    let plane = FlatPlane::of_feather(frame, shape, pose);
+    let plane = FlatPlane::of_straight_feather(frame, shape, pose);
     penetrates_body_posed(frame, shape, pose, (&tris, plane), body, part, ids, hint)
 }
 
@@ -246,7 +249,7 @@ fn penetrates_body_posed(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
-    (tris, plane): (&[[Vec3; 3]; 2], FlatPlane),
+    (tris, plane): (&[[Vec3; 3]], Option<FlatPlane>),
     body: &BodyIndex,
     part: &mut Vec<[Vec3; 3]>,
     ids: &mut Vec<u32>,
@@ -261,20 +264,21 @@ fn penetrates_body_posed(
         return false;
     };
     // Each triangle prepared once for all its tests.
-    let mut prepared = [Prepared::of(&part[0]); 4];
+    let mut prepared = [Prepared::of(&part[0]); 2 * MAX_TRIANGLES];
     for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
         *p = Prepared::of(t);
     }
-    let prepared = &prepared[..part.len().min(4)];
-    // Every part lies in the feather's plane: a body triangle wholly on
-    // one side of it crosses none of them. Nor does a part lying wholly on
-    // one side of the body triangle (along its face normal).
+    let prepared = &prepared[..part.len().min(2 * MAX_TRIANGLES)];
+    // Every part of a straight feather lies in its plane: a body triangle
+    // wholly on one side of it crosses none of them. Nor does a part lying
+    // wholly on one side of the body triangle (along its face normal).
+    let margin = posed_margin(frame, shape, pose);
     let crossing = |t: u32| {
         let corners = body.corners(t);
-        if plane.apart(&corners) {
+        if plane.is_some_and(|p| p.apart(&corners)) {
             return false;
         }
-        let axis = SeparatingAxis::new(body.normal(t), &corners, plane.margin);
+        let axis = SeparatingAxis::new(body.normal(t), &corners, margin);
         let mut tri = None;
         prepared.iter().zip(part.iter()).any(|(p, pt)| {
             !axis.separates(pt) && prepared_intersect(p, tri.get_or_insert_with(|| Prepared::of(&corners)))
@@ -320,29 +324,34 @@ fn penetrates_body_posed(
     part.iter().any(|t| t.iter().find_map(|&p| side(p)).is_some_and(|under| under))
 }
 
-/// A feather's two triangles with their bounding boxes, for testing one
+/// A feather's triangles with their bounding boxes, for testing one
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
-    triangles: [[Vec3; 3]; 2],
-    prepared: [Prepared; 2],
-    boxes: [Aabb; 2],
+    triangles: FeatherTriangles,
+    prepared: [Prepared; MAX_TRIANGLES],
+    boxes: [Aabb; MAX_TRIANGLES],
     whole: Aabb,
     plane: Option<FlatPlane>,
 }
 
 impl FeatherBoxes {
-    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
-        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
-        let prepared = [Prepared::of(&triangles[0]), Prepared::of(&triangles[1])];
-        Self { triangles: *triangles, prepared, boxes, whole: boxes[0].union(&boxes[1]), plane: None }
+    pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
+        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
+        let mut prepared = [Prepared::of(&triangles[0]); MAX_TRIANGLES];
+        for (k, t) in triangles.iter().enumerate().skip(1) {
+            boxes[k] = Aabb::of_triangle(t);
+            prepared[k] = Prepared::of(t);
+        }
+        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
+        Self { triangles: FeatherTriangles::from_slice(triangles), prepared, boxes, whole, plane: None }
     }
 
-    /// The boxes of a feather at a pose, knowing the plane it lies in
-    /// (triangles wholly on one side of it are ruled out without the
-    /// exact test): the same answers as [`FeatherBoxes::new`].
+    /// The boxes of a feather at a pose, knowing the plane a straight
+    /// feather lies in (triangles wholly on one side of it are ruled out
+    /// without the exact test): the same answers as [`FeatherBoxes::new`].
     pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
-        let plane = FlatPlane::of_feather(frame, shape, pose);
-        Self { plane: Some(plane), ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
+        let plane = FlatPlane::of_straight_feather(frame, shape, pose);
+        Self { plane, ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
     }
 
     /// [`penetrates_body_hinted`] for the feather and pose these boxes were
@@ -359,16 +368,13 @@ impl FeatherBoxes {
         ids: &mut Vec<u32>,
         hint: &mut Option<u32>,
     ) -> bool {
-        match self.plane {
-            Some(plane) => penetrates_body_posed(frame, shape, pose, (&self.triangles, plane), body, part, ids, hint),
-            None => penetrates_body_hinted(frame, shape, pose, body, part, ids, hint),
-        }
+        penetrates_body_posed(frame, shape, pose, (&self.triangles, self.plane), body, part, ids, hint)
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
     /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
     /// feathers, then of each pair of triangles).
-    pub(crate) fn intersects(&self, b: &[[Vec3; 3]; 2]) -> bool {
+    pub(crate) fn intersects(&self, b: &[[Vec3; 3]]) -> bool {
         self.intersects_boxed(&BoxedTriangles::new(b))
     }
 
@@ -378,8 +384,9 @@ impl FeatherBoxes {
         if !self.whole.overlaps(&b.whole) {
             return false;
         }
-        let mut prepared_b: [Option<Prepared>; 2] = [None; 2];
-        self.prepared.iter().zip(&self.boxes).any(|(ta, box_a)| {
+        let n = self.triangles.len();
+        let mut prepared_b: [Option<Prepared>; MAX_TRIANGLES] = [None; MAX_TRIANGLES];
+        self.prepared[..n].iter().zip(&self.boxes[..n]).any(|(ta, box_a)| {
             !box_a.is_point()
                 && b.triangles.iter().zip(&b.boxes).zip(&mut prepared_b).any(|((tb, box_b), pb)| {
                     !box_b.is_point()
@@ -389,6 +396,12 @@ impl FeatherBoxes {
                 })
         })
     }
+}
+
+/// The margin of the plane tests of a posed feather (see [`FlatPlane`]).
+fn posed_margin(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> f32 {
+    let length = shape.length * pose.scale.abs();
+    1e-4 * length + 1e-5 * (frame.position.abs().max_element() + length)
 }
 
 /// The plane a posed (flat) feather lies in, with a margin: a triangle
@@ -408,9 +421,14 @@ pub(crate) struct FlatPlane {
 impl FlatPlane {
     pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
         let normal = feather_normal(frame, pose);
-        let length = shape.length * pose.scale.abs();
-        let margin = 1e-4 * length + 1e-5 * (frame.position.abs().max_element() + length);
+        let margin = posed_margin(frame, shape, pose);
         Self { normal, offset: normal.dot(frame.position), margin }
+    }
+
+    /// The plane of a straight feather; `None` for a bent one (its
+    /// segments lie in planes of their own).
+    pub(crate) fn of_straight_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Option<Self> {
+        pose.is_straight().then(|| Self::of_feather(frame, shape, pose))
     }
 
     /// Whether triangle `t` lies wholly on one side, beyond the margin.
@@ -455,22 +473,26 @@ impl SeparatingAxis {
     }
 }
 
-/// Two triangles (a feather's, or its raised top) with their boxes, for
-/// testing against many posed feathers.
+/// A feather's triangles (or its raised top) with their boxes, for testing
+/// against many posed feathers.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxedTriangles {
-    triangles: [[Vec3; 3]; 2],
-    boxes: [Aabb; 2],
+    triangles: FeatherTriangles,
+    boxes: [Aabb; MAX_TRIANGLES],
     whole: Aabb,
 }
 
 impl BoxedTriangles {
-    pub(crate) fn new(triangles: &[[Vec3; 3]; 2]) -> Self {
-        let boxes = [Aabb::of_triangle(&triangles[0]), Aabb::of_triangle(&triangles[1])];
-        Self { triangles: *triangles, boxes, whole: boxes[0].union(&boxes[1]) }
+    pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
+        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
+        for (k, t) in triangles.iter().enumerate().skip(1) {
+            boxes[k] = Aabb::of_triangle(t);
+        }
+        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
+        Self { triangles: FeatherTriangles::from_slice(triangles), boxes, whole }
     }
 
-    /// The box of both triangles.
+    /// The box of all its triangles.
     pub(crate) fn bounds(&self) -> &Aabb {
         &self.whole
     }

@@ -1,0 +1,56 @@
+#include "pose_writer.h"
+
+#include "errors.h"
+
+#include <cstdint>
+#include <filesystem>
+
+namespace plumage_host {
+
+PoseWriter::PoseWriter(const std::string& path, PlumageConfig cfg, double fps, const std::vector<float>& rest, const std::vector<uint32_t>& indices,
+                       const std::vector<double>& times, const VertexMaps& maps)
+    : path_(path), frames_expected_(times.size()) {
+    std::error_code ec;
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+    file_ = std::fopen(path.c_str(), "wb");
+    if (file_ == nullptr) throw OutputError("cannot write " + path);
+    cfg.progress = nullptr;
+    cfg.progress_user_data = nullptr;
+    const char magic[8] = {'P', 'L', 'M', 'P', 'O', 'S', 'E', '\0'};
+    const uint32_t head[2] = {1, static_cast<uint32_t>(sizeof cfg)};
+    const uint64_t counts[3] = {rest.size() / 3, indices.size() / 3, times.size()};
+    const uint32_t mask = (maps.spacing.empty() ? 0u : 1u) | (maps.length.empty() ? 0u : 2u) | (maps.width.empty() ? 0u : 4u) | (maps.flow.empty() ? 0u : 8u);
+    const uint32_t tail[2] = {mask, 0};
+    write(magic, sizeof magic);
+    write(head, sizeof head);
+    write(counts, sizeof counts);
+    write(&fps, sizeof fps);
+    write(tail, sizeof tail);
+    write(&cfg, sizeof cfg);
+    write(rest.data(), rest.size() * sizeof(float));
+    write(indices.data(), indices.size() * sizeof(uint32_t));
+    write(times.data(), times.size() * sizeof(double));
+    for (const std::vector<float>* m : {&maps.spacing, &maps.length, &maps.width, &maps.flow}) write(m->data(), m->size() * sizeof(float));
+}
+
+PoseWriter::~PoseWriter() {
+    if (file_ != nullptr) std::fclose(file_);
+}
+
+void PoseWriter::write(const void* data, size_t bytes) {
+    if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes) throw OutputError("cannot write " + path_);
+}
+
+void PoseWriter::add_frame(const std::vector<float>& positions) {
+    write(positions.data(), positions.size() * sizeof(float));
+    ++frames_written_;
+}
+
+void PoseWriter::finish() {
+    std::FILE* f = file_;
+    file_ = nullptr;
+    if (std::fclose(f) != 0 || frames_written_ != frames_expected_) throw OutputError("cannot write " + path_);
+}
+
+}  // namespace plumage_host

@@ -1,0 +1,52 @@
+// Writes what the host hands the library (--poses FILE): the rest mesh, the
+// configuration, the per-vertex maps and every stepped frame's positions,
+// so that another program (the Python package's `dress` command) can drive
+// the library with exactly the same input. Little-endian, native layout:
+//
+//   char     magic[8]        "PLMPOSE\0"
+//   uint32_t version         1
+//   uint32_t config_size     sizeof(PlumageConfig)
+//   uint64_t vertex_count, triangle_count, frame_count
+//   double   fps
+//   uint32_t maps            bit 0 spacing, 1 length, 2 width, 3 flow
+//   uint32_t reserved        0
+//   PlumageConfig config     as created with (progress pointers zeroed)
+//   float    rest[3 * vertex_count]
+//   uint32_t indices[3 * triangle_count]
+//   double   times[frame_count]           clip seconds of each frame
+//   float    spacing[vertex_count], length[...], width[...], flow[3 * vertex_count]   (those present)
+//   float    frames[frame_count][3 * vertex_count]
+#pragma once
+
+#include "plumage.h"
+#include "plumage_system.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace plumage_host {
+
+class PoseWriter {
+public:
+    // Writes everything up to the frames (throws OutputError).
+    PoseWriter(const std::string& path, PlumageConfig cfg, double fps, const std::vector<float>& rest, const std::vector<uint32_t>& indices,
+               const std::vector<double>& times, const VertexMaps& maps);
+    ~PoseWriter();
+    PoseWriter(const PoseWriter&) = delete;
+    PoseWriter& operator=(const PoseWriter&) = delete;
+
+    void add_frame(const std::vector<float>& positions);
+    // Flushes and closes; throws OutputError unless every announced frame was written.
+    void finish();
+
+private:
+    void write(const void* data, size_t bytes);
+
+    std::string path_;
+    std::FILE* file_ = nullptr;
+    size_t frames_expected_ = 0;
+    size_t frames_written_ = 0;
+};
+
+}  // namespace plumage_host

@@ -1,0 +1,86 @@
+"""Reads the file `plumage_gltf --poses FILE` writes: what the C++ glTF host
+handed the library (rest mesh, configuration, per-vertex maps, and every
+stepped frame's positions), so that Python drives the library with exactly
+the same input. The layout is documented in cpp_examples/gltf_host/pose_writer.h.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from . import _ffi
+
+MAGIC = b"PLMPOSE\0"
+_HEAD = struct.Struct("<8sII3QdII")
+
+
+class PosesFormatError(ValueError):
+    """The file is not a pose file of a version this package reads."""
+
+
+@dataclass(frozen=True)
+class Poses:
+    rest: npt.NDArray[np.float32]  # (n, 3)
+    triangles: npt.NDArray[np.uint32]  # (m, 3)
+    times: npt.NDArray[np.float64]  # (frames,) clip seconds
+    frames: npt.NDArray[np.float32]  # (frames, n, 3)
+    fps: float
+    config: Dict[str, Any]  # keyword arguments of plumage.System
+    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays
+
+
+def config_from_struct(raw: _ffi.Config) -> Dict[str, Any]:
+    out: Dict[str, Any] = {}
+    for name in (f[0] for f in _ffi.Config._fields_):
+        if name in ("struct_size", "progress", "progress_user_data", "flow_source_enabled"):
+            continue
+        v = getattr(raw, name)
+        out[name] = tuple(v) if isinstance(v, ctypes.Array) else v
+    if not raw.flow_source_enabled:
+        out["flow_source"] = None
+    return out
+
+
+def read_poses(path: Union[str, Path]) -> Poses:
+    data = Path(path).read_bytes()
+    if len(data) < _HEAD.size:
+        raise PosesFormatError(f"{path}: too short for a pose file")
+    magic, version, config_size, nv, nt, nf, fps, mask, _ = _HEAD.unpack_from(data, 0)
+    if magic != MAGIC:
+        raise PosesFormatError(f"{path}: not a pose file (written by plumage_gltf --poses)")
+    if version != 1:
+        raise PosesFormatError(f"{path}: pose file version {version}; this package reads version 1")
+    if config_size != ctypes.sizeof(_ffi.Config):
+        raise PosesFormatError(f"{path}: PlumageConfig of {config_size} bytes; this package's has {ctypes.sizeof(_ffi.Config)}")
+    map_sizes = [("spacing_scale", nv), ("length_scale", nv), ("width_scale", nv), ("orientations", 3 * nv)]
+    expected = _HEAD.size + config_size + 12 * nv + 12 * nt + 8 * nf + 12 * nv * nf
+    expected += sum(4 * size for bit, (_, size) in enumerate(map_sizes) if mask >> bit & 1)
+    if len(data) != expected:
+        raise PosesFormatError(f"{path}: {len(data)} bytes where its header announces {expected}")
+    offset = _HEAD.size
+    raw = _ffi.Config.from_buffer_copy(data[offset : offset + config_size])
+    offset += config_size
+
+    def take(dtype: Any, count: int) -> np.ndarray:
+        nonlocal offset
+        arr = np.frombuffer(data, dtype=dtype, count=count, offset=offset).copy()
+        offset += arr.nbytes
+        return arr
+
+    rest = take("<f4", 3 * nv).reshape(-1, 3)
+    triangles = take("<u4", 3 * nt).reshape(-1, 3)
+    times = take("<f8", nf)
+    maps: Dict[str, Any] = {}
+    for bit, (name, size) in enumerate(map_sizes):
+        if mask >> bit & 1:
+            values = take("<f4", size)
+            maps[name] = values.reshape(-1, 3) if name == "orientations" else values
+    frames = take("<f4", 3 * nv * nf).reshape(nf, nv, 3)
+    return Poses(rest=rest, triangles=triangles, times=times, frames=frames, fps=fps, config=config_from_struct(raw), maps=maps)
