@@ -23,9 +23,13 @@
  *   - Functions taking `const PlumageSystem *` only read and may run
  *     concurrently with each other on the same system.
  *   - Functions taking `PlumageSystem *` need exclusive access to it.
- *   - Separate systems share nothing and may be used from different threads
- *     at the same time. Each system runs its own worker pool
- *     (PlumageConfig.threads); the process-wide rayon pool is never used.
+ *   - Separate systems share no state and may be used from different
+ *     threads at the same time. Workers (PlumageConfig.threads): with
+ *     threads = 1 no thread is started, every call runs on the thread that
+ *     makes it, and so does the progress callback; systems with threads = 0
+ *     share one pool of a worker per core (started with the first such
+ *     system, ended with the last); threads = N >= 2 gives a system its own
+ *     N workers. The process-wide rayon pool is never used.
  *   - plumage_version, plumage_abi_version, plumage_status_name and the init
  *     functions may be called from any thread at any time.
  */
@@ -220,8 +224,10 @@ typedef struct PlumageSystem PlumageSystem;
  * stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
  * leaves the system as it was before the call (a stopped create creates
  * nothing). It is called at least every few milliseconds while the library
- * works, possibly from one of the system's worker threads, never from two
- * threads at once. It must not call back into the same system.
+ * works, never from two threads at once: with `threads = 1` always on the
+ * thread that made the call (create, step or evaluate); with more threads
+ * on that thread or on one of the system's worker threads. It must not
+ * call back into the same system.
  */
 typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
@@ -245,7 +251,11 @@ typedef struct PlumageConfig {
    */
   uint64_t seed;
   /**
-   * Worker threads: 0 = all cores, 1 = inline on the calling thread.
+   * Worker threads: 1 = no worker thread: every call runs on the thread
+   * that makes it, progress callbacks included; 0 = one worker per core,
+   * in a pool shared by every system made with 0; N ≥ 2 = the system's
+   * own N workers, started at create. With workers, the calling thread
+   * waits while they work. Results are byte-identical whatever the count.
    */
   uint32_t threads;
   /**
@@ -418,6 +428,235 @@ typedef struct PlumageMeshDesc {
 } PlumageMeshDesc;
 
 /**
+ * Sampling quality figures (`plumage_system_sampling_stats`). Fill
+ * with `plumage_sampling_stats_init` (or set `struct_size = sizeof(PlumageSamplingStats)`)
+ * before the call.
+ */
+typedef struct PlumageSamplingStats {
+  /**
+   * Set by the caller to `sizeof(PlumageSamplingStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Number of roots planted.
+   */
+  uint32_t roots;
+  /**
+   * Global Poisson-disk radius d used, model units.
+   */
+  float spacing;
+  /**
+   * min over roots of (distance to the nearest root on the same side) / d_i.
+   */
+  float relative_radius;
+  /**
+   * max over surface probes of (distance to the nearest root) / local d.
+   */
+  float coverage_gap;
+  /**
+   * Mean of cos 4(φ − θ) over each root's 4 nearest neighbours (1 = lattice turned by θ, 0 = random).
+   */
+  float alignment;
+  /**
+   * Wall time of sampling.
+   */
+  double seconds;
+} PlumageSamplingStats;
+
+/**
+ * Static ordering figures (`plumage_system_ordering_stats`). Fill
+ * with `plumage_ordering_stats_init` (or set `struct_size = sizeof(PlumageOrderingStats)`)
+ * before the call.
+ */
+typedef struct PlumageOrderingStats {
+  /**
+   * Set by the caller to `sizeof(PlumageOrderingStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Symmetric neighbour pairs.
+   */
+  uint32_t pairs;
+  /**
+   * Priority edges kept in the DAG.
+   */
+  uint32_t edges;
+  /**
+   * Edges dropped to break cycles.
+   */
+  uint32_t dropped_edges;
+  /**
+   * Edges whose head comes after their tail in the order (0 when correct).
+   */
+  uint32_t violations;
+  /**
+   * Always 0 (keeps the struct free of padding bytes).
+   */
+  uint32_t reserved;
+  /**
+   * Wall time of neighbourhoods, priorities and ordering.
+   */
+  double seconds;
+} PlumageOrderingStats;
+
+/**
+ * What the last create, step or evaluate did (`plumage_system_frame_stats`).
+ * Fill with `plumage_frame_stats_init` (or set `struct_size =
+ * sizeof(PlumageFrameStats)`) before the call.
+ */
+typedef struct PlumageFrameStats {
+  /**
+   * Set by the caller to `sizeof(PlumageFrameStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Feathers whose pitch or roll hit a limit.
+   */
+  uint32_t clamped;
+  /**
+   * 0 after create, then 1, 2, ... after each step (evaluate keeps it).
+   */
+  uint64_t frame_index;
+  /**
+   * Feathers re-adjusted.
+   */
+  uint64_t adjusted;
+  /**
+   * Obstacle feathers rasterised (collision detections).
+   */
+  uint64_t collision_tests;
+  /**
+   * collision_tests / adjusted (0 when nothing was adjusted).
+   */
+  double collision_tests_per_feather;
+  /**
+   * Neighbour pairs whose priority difference changed sign.
+   */
+  uint64_t priority_changes;
+  /**
+   * priority_changes as a percentage of the feather count.
+   */
+  double priority_change_percent;
+  /**
+   * Edge reversals carried out.
+   */
+  uint64_t reversals;
+  /**
+   * Reversals refused by the cycle rule.
+   */
+  uint64_t reversals_refused;
+  /**
+   * Cycles broken by deleting their smallest-|ΔP| edge.
+   */
+  uint64_t cycles_broken;
+  /**
+   * Seconds spent re-posing roots and reordering.
+   */
+  double reorder_seconds;
+  /**
+   * Seconds spent adjusting feathers.
+   */
+  double adjust_seconds;
+  /**
+   * Seconds of the whole call.
+   */
+  double step_seconds;
+  /**
+   * Feathers whose surroundings moved relative to them, since they were
+   * last adjusted, by more than θs times their length (the paper's R_k);
+   * 0 after create and evaluate.
+   */
+  uint64_t deformed;
+  /**
+   * Feathers readjusted in any case: surroundings moved by more than the
+   * drift tolerance (θs in the paper's rule) times their length, or
+   * obstacles changed by the reordering; `adjusted` minus this came by
+   * propagation or failed the exact check.
+   */
+  uint64_t seeds;
+  /**
+   * Feathers whose surroundings moved that were checked exactly and kept
+   * their pose (incremental mode with `drift_tolerance` above `theta_s`).
+   */
+  uint64_t verified;
+  /**
+   * The part of `reorder_seconds` spent finding neighbourhoods and
+   * obstacle candidates at the current pose: every create, evaluate and
+   * rebuild step, incremental steps with `recompute_neighbourhoods`,
+   * never a legacy step (appended; a shorter, older struct is filled up
+   * to its `struct_size`).
+   */
+  double neighbourhood_seconds;
+  /**
+   * Levels the adjustment ran through: the longest chain, among the
+   * feathers the call may visit, of feathers each reading the one before
+   * as an obstacle, plus one per feather of a step's rare second pass.
+   * The feathers of a level run in parallel; levels close to the number
+   * of feathers visited mean the call ran nearly one at a time.
+   */
+  uint64_t levels;
+} PlumageFrameStats;
+
+/**
+ * Exact validation of the current feathers (`plumage_system_validate`).
+ * Fill with `plumage_validation_init` (or set `struct_size =
+ * sizeof(PlumageValidation)`) before the call.
+ */
+typedef struct PlumageValidation {
+  /**
+   * Set by the caller to `sizeof(PlumageValidation)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Padding; always 0.
+   */
+  uint32_t reserved;
+  /**
+   * Pairs of feathers whose triangles intersect (exact test).
+   */
+  uint64_t intersecting_pairs;
+  /**
+   * Feathers crossing the body more than 5 % of their length from the root.
+   */
+  uint64_t body_penetrations;
+  /**
+   * Fraction of the probes of the feathered, visible skin whose normal
+   * ray meets a feather within the longest feather length. Bare skin
+   * (spacing multiplier 0) and skin buried inside the body (where the
+   * mesh passes through itself) carry no probes.
+   */
+  double coverage;
+  /**
+   * Mean pitch of the feathers, degrees.
+   */
+  double mean_pitch_deg;
+  /**
+   * Probes behind `coverage` (appended; a shorter, older struct is
+   * filled up to its `struct_size`).
+   */
+  uint64_t probes;
+  /**
+   * Probes of the feathered skin left out of `coverage` because they lie
+   * inside the body.
+   */
+  uint64_t buried_probes;
+  /**
+   * Median distance from a placed feather's tip to the body surface, in
+   * feather lengths (appended). A coat that lies down keeps it small.
+   */
+  double tip_height_median;
+  /**
+   * 90th percentile of the same, in feather lengths.
+   */
+  double tip_height_p90;
+  /**
+   * Percentage of placed feathers whose tip stands more than half a
+   * feather length off the skin (bristles).
+   */
+  double bristle_percent;
+} PlumageValidation;
+
+/**
  * One feather, copied out by `plumage_system_feathers`.
  */
 typedef struct PlumageFeather {
@@ -582,231 +821,6 @@ typedef struct PlumageFeatherGeometry {
   size_t placed_capacity;
 } PlumageFeatherGeometry;
 
-/**
- * Sampling quality figures (`plumage_system_sampling_stats`). Set
- * `struct_size = sizeof(PlumageSamplingStats)` before the call.
- */
-typedef struct PlumageSamplingStats {
-  /**
-   * Set by the caller to `sizeof(PlumageSamplingStats)`; the library writes back the bytes it filled.
-   */
-  uint32_t struct_size;
-  /**
-   * Number of roots planted.
-   */
-  uint32_t roots;
-  /**
-   * Global Poisson-disk radius d used, model units.
-   */
-  float spacing;
-  /**
-   * min over roots of (distance to the nearest root on the same side) / d_i.
-   */
-  float relative_radius;
-  /**
-   * max over surface probes of (distance to the nearest root) / local d.
-   */
-  float coverage_gap;
-  /**
-   * Mean of cos 4(φ − θ) over each root's 4 nearest neighbours (1 = lattice turned by θ, 0 = random).
-   */
-  float alignment;
-  /**
-   * Wall time of sampling.
-   */
-  double seconds;
-} PlumageSamplingStats;
-
-/**
- * Static ordering figures (`plumage_system_ordering_stats`). Set
- * `struct_size = sizeof(PlumageOrderingStats)` before the call.
- */
-typedef struct PlumageOrderingStats {
-  /**
-   * Set by the caller to `sizeof(PlumageOrderingStats)`; the library writes back the bytes it filled.
-   */
-  uint32_t struct_size;
-  /**
-   * Symmetric neighbour pairs.
-   */
-  uint32_t pairs;
-  /**
-   * Priority edges kept in the DAG.
-   */
-  uint32_t edges;
-  /**
-   * Edges dropped to break cycles.
-   */
-  uint32_t dropped_edges;
-  /**
-   * Edges whose head comes after their tail in the order (0 when correct).
-   */
-  uint32_t violations;
-  /**
-   * Always 0 (keeps the struct free of padding bytes).
-   */
-  uint32_t reserved;
-  /**
-   * Wall time of neighbourhoods, priorities and ordering.
-   */
-  double seconds;
-} PlumageOrderingStats;
-
-/**
- * What the last create, step or evaluate did (`plumage_system_frame_stats`).
- * Set `struct_size = sizeof(PlumageFrameStats)` before the call.
- */
-typedef struct PlumageFrameStats {
-  /**
-   * Set by the caller to `sizeof(PlumageFrameStats)`; the library writes back the bytes it filled.
-   */
-  uint32_t struct_size;
-  /**
-   * Feathers whose pitch or roll hit a limit.
-   */
-  uint32_t clamped;
-  /**
-   * 0 after create, then 1, 2, ... after each step (evaluate keeps it).
-   */
-  uint64_t frame_index;
-  /**
-   * Feathers re-adjusted.
-   */
-  uint64_t adjusted;
-  /**
-   * Obstacle feathers rasterised (collision detections).
-   */
-  uint64_t collision_tests;
-  /**
-   * collision_tests / adjusted (0 when nothing was adjusted).
-   */
-  double collision_tests_per_feather;
-  /**
-   * Neighbour pairs whose priority difference changed sign.
-   */
-  uint64_t priority_changes;
-  /**
-   * priority_changes as a percentage of the feather count.
-   */
-  double priority_change_percent;
-  /**
-   * Edge reversals carried out.
-   */
-  uint64_t reversals;
-  /**
-   * Reversals refused by the cycle rule.
-   */
-  uint64_t reversals_refused;
-  /**
-   * Cycles broken by deleting their smallest-|ΔP| edge.
-   */
-  uint64_t cycles_broken;
-  /**
-   * Seconds spent re-posing roots and reordering.
-   */
-  double reorder_seconds;
-  /**
-   * Seconds spent adjusting feathers.
-   */
-  double adjust_seconds;
-  /**
-   * Seconds of the whole call.
-   */
-  double step_seconds;
-  /**
-   * Feathers whose surroundings moved relative to them, since they were
-   * last adjusted, by more than θs times their length (the paper's R_k);
-   * 0 after create and evaluate.
-   */
-  uint64_t deformed;
-  /**
-   * Feathers readjusted in any case: surroundings moved by more than the
-   * drift tolerance (θs in the paper's rule) times their length, or
-   * obstacles changed by the reordering; `adjusted` minus this came by
-   * propagation or failed the exact check.
-   */
-  uint64_t seeds;
-  /**
-   * Feathers whose surroundings moved that were checked exactly and kept
-   * their pose (incremental mode with `drift_tolerance` above `theta_s`).
-   */
-  uint64_t verified;
-  /**
-   * The part of `reorder_seconds` spent finding neighbourhoods and
-   * obstacle candidates at the current pose: every create, evaluate and
-   * rebuild step, incremental steps with `recompute_neighbourhoods`,
-   * never a legacy step (appended; a shorter, older struct is filled up
-   * to its `struct_size`).
-   */
-  double neighbourhood_seconds;
-  /**
-   * Levels the adjustment ran through: the longest chain, among the
-   * feathers the call may visit, of feathers each reading the one before
-   * as an obstacle, plus one per feather of a step's rare second pass.
-   * The feathers of a level run in parallel; levels close to the number
-   * of feathers visited mean the call ran nearly one at a time.
-   */
-  uint64_t levels;
-} PlumageFrameStats;
-
-/**
- * Exact validation of the current feathers (`plumage_system_validate`).
- * Set `struct_size = sizeof(PlumageValidation)` before the call.
- */
-typedef struct PlumageValidation {
-  /**
-   * Set by the caller to `sizeof(PlumageValidation)`; the library writes back the bytes it filled.
-   */
-  uint32_t struct_size;
-  /**
-   * Padding; always 0.
-   */
-  uint32_t reserved;
-  /**
-   * Pairs of feathers whose triangles intersect (exact test).
-   */
-  uint64_t intersecting_pairs;
-  /**
-   * Feathers crossing the body more than 5 % of their length from the root.
-   */
-  uint64_t body_penetrations;
-  /**
-   * Fraction of the probes of the feathered, visible skin whose normal
-   * ray meets a feather within the longest feather length. Bare skin
-   * (spacing multiplier 0) and skin buried inside the body (where the
-   * mesh passes through itself) carry no probes.
-   */
-  double coverage;
-  /**
-   * Mean pitch of the feathers, degrees.
-   */
-  double mean_pitch_deg;
-  /**
-   * Probes behind `coverage` (appended; a shorter, older struct is
-   * filled up to its `struct_size`).
-   */
-  uint64_t probes;
-  /**
-   * Probes of the feathered skin left out of `coverage` because they lie
-   * inside the body.
-   */
-  uint64_t buried_probes;
-  /**
-   * Median distance from a placed feather's tip to the body surface, in
-   * feather lengths (appended). A coat that lies down keeps it small.
-   */
-  double tip_height_median;
-  /**
-   * 90th percentile of the same, in feather lengths.
-   */
-  double tip_height_p90;
-  /**
-   * Percentage of placed feathers whose tip stands more than half a
-   * feather length off the skin (bristles).
-   */
-  double bristle_percent;
-} PlumageValidation;
-
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -843,6 +857,42 @@ void plumage_config_init(struct PlumageConfig *cfg);
  * `mesh` is NULL or points to writable memory for one `PlumageMeshDesc`.
  */
 void plumage_mesh_desc_init(struct PlumageMeshDesc *mesh);
+
+/**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumageSamplingStats)`, ready for
+ * `plumage_system_sampling_stats`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageSamplingStats`.
+ */
+void plumage_sampling_stats_init(struct PlumageSamplingStats *out);
+
+/**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumageOrderingStats)`, ready for
+ * `plumage_system_ordering_stats`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageOrderingStats`.
+ */
+void plumage_ordering_stats_init(struct PlumageOrderingStats *out);
+
+/**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumageFrameStats)`, ready for
+ * `plumage_system_frame_stats`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageFrameStats`.
+ */
+void plumage_frame_stats_init(struct PlumageFrameStats *out);
+
+/**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumageValidation)`, ready for
+ * `plumage_system_validate`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageValidation`.
+ */
+void plumage_validation_init(struct PlumageValidation *out);
 
 /**
  * Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test: the Rust tests (unit, integration, header drift), then the
-# C++ tests under ctest, in a normal build and in an ASan+UBSan build.
+# C++ tests under ctest, in a normal build and in an ASan+UBSan build, and the
+# installed library from a separate consumer project (scripts/consumer_test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-deps.sh
@@ -13,6 +14,9 @@ echo "== C++ build and ctest"
 cmake -S cpp_examples -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure
+
+echo "== install into a temporary prefix, then the separate consumer project against it"
+scripts/consumer_test.sh build
 
 echo "== Python package: pytest (venv in build/python-venv)"
 py_env=build/python-venv

@@ -29,7 +29,8 @@ pub enum Mode {
 pub struct Config {
     /// Seed of every random choice; same input and seed give the same bytes.
     pub seed: u64,
-    /// Worker threads: 0 = all cores, 1 = run inline on the caller's thread.
+    /// Worker threads: 0 = all cores (one pool shared by every system made
+    /// with 0), 1 = run inline on the caller's thread, N = N of its own.
     pub threads: usize,
     /// Root sampler.
     pub sampler: SamplerKind,

@@ -21,8 +21,9 @@ pub enum Phase {
 }
 
 /// Receives progress; returns `false` to ask the running call to stop.
-/// It may be called from any of the system's worker threads, never from two
-/// at once.
+/// It may be called from the calling thread or any of the system's worker
+/// threads (with one thread: always the calling thread), never from two at
+/// once.
 pub trait ProgressSink: Send + Sync {
     /// `fraction` is the completed share of `phase`, in [0, 1].
     fn report(&self, phase: Phase, fraction: f32) -> bool;

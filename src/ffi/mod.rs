@@ -70,6 +70,65 @@ pub unsafe extern "C" fn plumage_mesh_desc_init(mesh: *mut PlumageMeshDesc) {
     unsafe { mesh.write(PlumageMeshDesc::empty()) };
 }
 
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumageSamplingStats)`, ready for
+/// `plumage_system_sampling_stats`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageSamplingStats`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_sampling_stats_init(out: *mut PlumageSamplingStats) {
+    // SAFETY: NULL or writable for one PlumageSamplingStats (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumageOrderingStats)`, ready for
+/// `plumage_system_ordering_stats`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageOrderingStats`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_ordering_stats_init(out: *mut PlumageOrderingStats) {
+    // SAFETY: NULL or writable for one PlumageOrderingStats (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumageFrameStats)`, ready for
+/// `plumage_system_frame_stats`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageFrameStats`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_frame_stats_init(out: *mut PlumageFrameStats) {
+    // SAFETY: NULL or writable for one PlumageFrameStats (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumageValidation)`, ready for
+/// `plumage_system_validate`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageValidation`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_validation_init(out: *mut PlumageValidation) {
+    // SAFETY: NULL or writable for one PlumageValidation (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
+/// Writes `T::default()` with its `struct_size` (chosen by `field`) set to
+/// `size_of::<T>()`, unless `out` is NULL.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `T`.
+unsafe fn write_sized<T: Default>(out: *mut T, field: impl FnOnce(&mut T) -> &mut u32) {
+    if out.is_null() {
+        return;
+    }
+    let mut value = T::default();
+    *field(&mut value) = std::mem::size_of::<T>() as u32;
+    // SAFETY: non-NULL and writable for one T (caller's contract).
+    unsafe { out.write(value) };
+}
+
 /// Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).
 /// On success `*out` receives the new system; on any error `*out` is set to
 /// NULL (when `out` is not NULL) and the message is available from

@@ -31,7 +31,11 @@ pub struct PlumageConfig {
     pub sampler: u32,
     /// Seed of every random choice: same input and seed, same bytes.
     pub seed: u64,
-    /// Worker threads: 0 = all cores, 1 = inline on the calling thread.
+    /// Worker threads: 1 = no worker thread: every call runs on the thread
+    /// that makes it, progress callbacks included; 0 = one worker per core,
+    /// in a pool shared by every system made with 0; N ≥ 2 = the system's
+    /// own N workers, started at create. With workers, the calling thread
+    /// waits while they work. Results are byte-identical whatever the count.
     pub threads: u32,
     /// `PLUMAGE_MODE_*`.
     pub mode: u32,
@@ -109,8 +113,10 @@ pub struct PlumageConfig {
 /// stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and
 /// leaves the system as it was before the call (a stopped create creates
 /// nothing). It is called at least every few milliseconds while the library
-/// works, possibly from one of the system's worker threads, never from two
-/// threads at once. It must not call back into the same system.
+/// works, never from two threads at once: with `threads = 1` always on the
+/// thread that made the call (create, step or evaluate); with more threads
+/// on that thread or on one of the system's worker threads. It must not
+/// call back into the same system.
 pub type PlumageProgressFn = Option<unsafe extern "C" fn(user_data: *mut c_void, phase: u32, fraction: f32) -> i32>;
 
 /// Progress phase: checking and welding the mesh, building the surface.
@@ -439,8 +445,9 @@ impl From<&crate::stats::FeatherRecord> for PlumageFeather {
     }
 }
 
-/// Sampling quality figures (`plumage_system_sampling_stats`). Set
-/// `struct_size = sizeof(PlumageSamplingStats)` before the call.
+/// Sampling quality figures (`plumage_system_sampling_stats`). Fill
+/// with `plumage_sampling_stats_init` (or set `struct_size = sizeof(PlumageSamplingStats)`)
+/// before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageSamplingStats {
@@ -460,8 +467,9 @@ pub struct PlumageSamplingStats {
     pub seconds: f64,
 }
 
-/// Static ordering figures (`plumage_system_ordering_stats`). Set
-/// `struct_size = sizeof(PlumageOrderingStats)` before the call.
+/// Static ordering figures (`plumage_system_ordering_stats`). Fill
+/// with `plumage_ordering_stats_init` (or set `struct_size = sizeof(PlumageOrderingStats)`)
+/// before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageOrderingStats {
@@ -482,7 +490,8 @@ pub struct PlumageOrderingStats {
 }
 
 /// What the last create, step or evaluate did (`plumage_system_frame_stats`).
-/// Set `struct_size = sizeof(PlumageFrameStats)` before the call.
+/// Fill with `plumage_frame_stats_init` (or set `struct_size =
+/// sizeof(PlumageFrameStats)`) before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageFrameStats {
@@ -541,7 +550,8 @@ pub struct PlumageFrameStats {
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
-/// Set `struct_size = sizeof(PlumageValidation)` before the call.
+/// Fill with `plumage_validation_init` (or set `struct_size =
+/// sizeof(PlumageValidation)`) before the call.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlumageValidation {
