@@ -188,6 +188,19 @@
 #define PLUMAGE_MODE_REBUILD 2
 
 /**
+ * `plumage_config_init_preset`: contour feathers (the defaults of
+ * `plumage_config_init`).
+ */
+#define PLUMAGE_PRESET_FEATHERS 0
+
+/**
+ * `plumage_config_init_preset`: fish scales, short and wide (2 spacings
+ * each), nearly rigid (2 segments, bend limit 0.15 rad), in staggered rows
+ * each overlapping the next by half.
+ */
+#define PLUMAGE_PRESET_SCALES 1
+
+/**
  * Progress phase: checking and welding the mesh, building the surface.
  */
 #define PLUMAGE_PHASE_PREPARING 0
@@ -381,6 +394,16 @@ typedef struct PlumageConfig {
    * [0, 1.2] (default 0.4; 0 keeps feathers straight).
    */
   float bend_limit;
+  /**
+   * Feather length as a multiple of the local spacing when
+   * `feather_length` is 0 (default 4; scales 2), in (0, 20].
+   */
+  float length_per_spacing;
+  /**
+   * Feather width as a multiple of the local spacing when
+   * `feather_width` is 0 (default 1.75; scales 2), in (0, 20].
+   */
+  float width_per_spacing;
 } PlumageConfig;
 
 /**
@@ -848,6 +871,17 @@ const char *plumage_status_name(uint32_t status);
  * `cfg` is NULL or points to writable memory for one `PlumageConfig`.
  */
 void plumage_config_init(struct PlumageConfig *cfg);
+
+/**
+ * Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
+ * `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
+ * gives; `PLUMAGE_PRESET_SCALES` fish scales. An unknown preset is refused
+ * with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
+ *
+ * # Safety
+ * `cfg` is NULL or points to writable memory for one `PlumageConfig`.
+ */
+uint32_t plumage_config_init_preset(struct PlumageConfig *cfg, uint32_t preset);
 
 /**
  * Sets every pointer of `mesh` to NULL, every count to 0 and sets

@@ -92,12 +92,8 @@ impl Dressing {
         roots
             .iter()
             .map(|r| {
-                let mut s = FeatherShape::with_overrides(
-                    r.spacing,
-                    config.feather_length,
-                    config.feather_width,
-                    config.feather_thickness,
-                );
+                let mut s = FeatherShape::proportioned(r.spacing, config.length_per_spacing, config.width_per_spacing)
+                    .overridden(config.feather_length, config.feather_width, config.feather_thickness);
                 s.length *= r.length_scale;
                 s.width *= r.width_scale;
                 if config.feather_thickness <= 0.0 {

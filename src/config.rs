@@ -117,6 +117,26 @@ pub struct Config {
     /// Largest bend at each joint of a segmented shaft, radians, in
     /// [0, 1.2] (0 keeps feathers straight).
     pub bend_limit: f32,
+    /// Feather length as a multiple of the local spacing, when
+    /// `feather_length` is 0 (default 4: a feather reaches over three to
+    /// four rows of neighbours), in (0, 20].
+    pub length_per_spacing: f32,
+    /// Feather width as a multiple of the local spacing, when
+    /// `feather_width` is 0 (default 1.75), in (0, 20].
+    pub width_per_spacing: f32,
+}
+
+/// What a system dresses a surface with: the defaults of [`Config`] for
+/// each ([`Config::preset`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Preset {
+    /// Contour feathers: long (4 rows), narrow, lying over three to four
+    /// rows of their neighbours.
+    Feathers,
+    /// Fish scales: short and wide (2 spacings each), nearly rigid (two
+    /// segments, a small bend), in staggered rows, each overlapping the
+    /// next row by half.
+    Scales,
 }
 
 impl Default for Config {
@@ -149,6 +169,26 @@ impl Default for Config {
             curvature_min_scale: 0.4,
             shaft_segments: 1,
             bend_limit: crate::adjustment::DEFAULT_BEND_LIMIT,
+            length_per_spacing: crate::feather::LENGTH_PER_SPACING,
+            width_per_spacing: crate::feather::WIDTH_PER_SPACING,
+        }
+    }
+}
+
+impl Config {
+    /// The defaults for a preset ([`Config::default`] is
+    /// [`Preset::Feathers`]).
+    pub fn preset(preset: Preset) -> Self {
+        match preset {
+            Preset::Feathers => Self::default(),
+            Preset::Scales => Self {
+                length_per_spacing: 2.0,
+                width_per_spacing: 2.0,
+                shaft_segments: 2,
+                bend_limit: 0.15,
+                theta: std::f32::consts::FRAC_PI_4,
+                ..Self::default()
+            },
         }
     }
 }
@@ -181,6 +221,13 @@ impl Config {
         }
         if !(self.bend_limit.is_finite() && (0.0..=1.2).contains(&self.bend_limit)) {
             return bad(format!("config.bend_limit must be in [0, 1.2] radians (got {})", self.bend_limit));
+        }
+        for (name, v) in
+            [("length_per_spacing", self.length_per_spacing), ("width_per_spacing", self.width_per_spacing)]
+        {
+            if !(v.is_finite() && v > 0.0 && v <= 20.0) {
+                return bad(format!("config.{name} must be in (0, 20] (got {v})"));
+            }
         }
         if !self.theta.is_finite() {
             return bad(format!("config.theta must be finite (got {})", self.theta));

@@ -210,7 +210,7 @@ fn nominal_feather_length(surface: &Surface, config: &Config) -> f32 {
         let target = crate::sampling::target_feathers(config) as f64;
         (surface.rest_area() / (crate::sampling::GUIDED_PACKING * target)).sqrt() as f32
     };
-    crate::feather::LENGTH_PER_SPACING * spacing
+    config.length_per_spacing * spacing
 }
 
 /// Per vertex, the spacing multiplier the bending of the surface calls for:

@@ -32,7 +32,7 @@ pub mod surface;
 pub mod system;
 pub mod validation;
 
-pub use config::{Config, Mode, SamplerKind};
+pub use config::{Config, Mode, Preset, SamplerKind};
 pub use error::{Error, ErrorKind, Result};
 pub use mesh::MeshInput;
 pub use system::System;

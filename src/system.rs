@@ -389,6 +389,8 @@ impl System {
             curvature_min_scale,
             shaft_segments,
             bend_limit,
+            length_per_spacing,
+            width_per_spacing,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
@@ -427,6 +429,8 @@ impl System {
                 *drift_tolerance,
                 *curvature_min_scale,
                 *bend_limit,
+                *length_per_spacing,
+                *width_per_spacing,
                 flow_axis.x,
                 flow_axis.y,
                 flow_axis.z,

@@ -448,3 +448,56 @@ fn validation_reports_tip_heights_and_fills_older_structs() {
     assert_eq!(unsafe { plumage_system_validate(sys, &mut tiny) }, PLUMAGE_STATUS_UNSUPPORTED_STRUCT_SIZE);
     unsafe { plumage_system_destroy(sys) };
 }
+
+/// Presets: scales are short, wide and nearly rigid; an unknown preset is
+/// refused and leaves the struct as it was; a scale coat is collision-free
+/// and its scales are half as long as feathers would be.
+#[test]
+fn presets_fill_the_config() {
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    assert_eq!(unsafe { plumage_config_init_preset(cfg.as_mut_ptr(), PLUMAGE_PRESET_SCALES) }, PLUMAGE_STATUS_OK);
+    let scales = unsafe { cfg.assume_init() };
+    assert_eq!(scales.struct_size as usize, std::mem::size_of::<PlumageConfig>());
+    assert_eq!((scales.length_per_spacing, scales.width_per_spacing, scales.shaft_segments), (2.0, 2.0, 2));
+    let mut feathers = scales;
+    assert_eq!(unsafe { plumage_config_init_preset(&mut feathers, PLUMAGE_PRESET_FEATHERS) }, PLUMAGE_STATUS_OK);
+    let mut plain = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(plain.as_mut_ptr()) };
+    let plain = unsafe { plain.assume_init() };
+    assert_eq!(
+        (feathers.length_per_spacing, feathers.shaft_segments),
+        (plain.length_per_spacing, plain.shaft_segments)
+    );
+    let mut kept = scales;
+    assert_eq!(unsafe { plumage_config_init_preset(&mut kept, 7) }, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    assert!(thread_error().contains("preset 7"), "{}", thread_error());
+    assert_eq!(kept.shaft_segments, scales.shaft_segments);
+    assert_eq!(unsafe { plumage_config_init_preset(null_mut(), PLUMAGE_PRESET_SCALES) }, PLUMAGE_STATUS_NULL_POINTER);
+
+    let (pos, idx) = grid_soup();
+    let d = desc(&pos, &idx);
+    let mut length = [0.0f32; 2];
+    for (k, cfg) in [plain, scales].iter().enumerate() {
+        let mut sys = null_mut();
+        assert_eq!(unsafe { plumage_system_create(cfg, &d, &mut sys) }, PLUMAGE_STATUS_OK, "{}", thread_error());
+        let mut v =
+            PlumageValidation { struct_size: std::mem::size_of::<PlumageValidation>() as u32, ..Default::default() };
+        assert_eq!(unsafe { plumage_system_validate(sys, &mut v) }, PLUMAGE_STATUS_OK);
+        assert_eq!((v.intersecting_pairs, v.body_penetrations), (0, 0));
+        let mut n = 0usize;
+        unsafe { plumage_system_feathers(sys, null_mut(), 0, &mut n) };
+        let mut records = vec![PlumageFeather::default(); n];
+        assert_eq!(unsafe { plumage_system_feathers(sys, records.as_mut_ptr(), n, &mut n) }, PLUMAGE_STATUS_OK);
+        let spacing = {
+            let mut s = PlumageSamplingStats {
+                struct_size: std::mem::size_of::<PlumageSamplingStats>() as u32,
+                ..Default::default()
+            };
+            assert_eq!(unsafe { plumage_system_sampling_stats(sys, &mut s) }, PLUMAGE_STATUS_OK);
+            s.spacing
+        };
+        length[k] = records.iter().map(|f| f.length).fold(0.0, f32::max) / spacing as f32;
+        unsafe { plumage_system_destroy(sys) };
+    }
+    assert!((length[0] - 4.0).abs() < 0.5 && (length[1] - 2.0).abs() < 0.3, "longest per spacing {length:?}");
+}

@@ -50,6 +50,7 @@ std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps)
 PlumageConfig make_config(const Options& opt) {
     PlumageConfig cfg;
     plumage_config_init(&cfg);
+    if (opt.preset) check(plumage_config_init_preset(&cfg, *opt.preset), nullptr, "plumage_config_init_preset");
     if (opt.feathers) cfg.target_feathers = *opt.feathers;
     if (opt.spacing) cfg.spacing = *opt.spacing;
     if (opt.sampler) cfg.sampler = *opt.sampler;

@@ -100,7 +100,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report", "--poses",
-                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit",
+                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
         if (option == o) return true;
@@ -152,6 +152,8 @@ std::string usage_text() {
            "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
            "                       (default 0.4; 1 = uniform spacing)\n"
            "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
+           "  --preset feathers|scales   the library's defaults for contour feathers (default) or fish scales\n"
+           "                       (short, wide, nearly rigid, staggered rows); later options override them\n"
            "  --shaft-segments S   shaft segments of a feather, 1 to 4 (default 1 = rigid kite): more lets it drape\n"
            "  --bend-limit DEG     largest bend at each shaft joint (default 22.9)\n"
            "  --spacing-map NAME[:C]   per-vertex spacing multiplier from vertex attribute NAME (component C of a\n"
@@ -219,6 +221,7 @@ Options parse_options(int argc, const char* const* argv) {
         } else if (arg == "--drift-tolerance") o.drift_tolerance_deg = parse_float(arg, value);
         else if (arg == "--curvature-min-scale") o.curvature_min_scale = parse_float(arg, value);
         else if (arg == "--fluffiness") o.fluffiness_deg = parse_float(arg, value);
+        else if (arg == "--preset") o.preset = parse_choice(arg, value, {"feathers", "scales"}, {PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SCALES});
         else if (arg == "--shaft-segments") o.shaft_segments = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--bend-limit") o.bend_limit_deg = parse_float(arg, value);
         else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));

@@ -38,6 +38,7 @@ struct Options {
     std::optional<uint32_t> mode;
     std::optional<float> drift_tolerance_deg;
     std::optional<float> curvature_min_scale;
+    std::optional<uint32_t> preset;
     std::optional<uint32_t> shaft_segments;
     std::optional<float> bend_limit_deg;
     std::optional<float> fluffiness_deg;

@@ -103,6 +103,8 @@ json config_to_json(const PlumageConfig& c) {
               {"curvature_min_scale", tidy(c.curvature_min_scale)},
               {"shaft_segments", c.shaft_segments},
               {"bend_limit", tidy(c.bend_limit)},
+              {"length_per_spacing", tidy(c.length_per_spacing)},
+              {"width_per_spacing", tidy(c.width_per_spacing)},
               {"flow_axis", {tidy(c.flow_axis[0]), tidy(c.flow_axis[1]), tidy(c.flow_axis[2])}},
               {"recompute_neighbourhoods", c.recompute_neighbourhoods != 0}};
     if (c.flow_source_enabled != 0)

@@ -180,8 +180,13 @@ void check_glb(const std::string& file, size_t frames, const json& report) {
         CHECK(m.accessors[static_cast<size_t>(pos)].count == report.value("vertices", size_t{0}));
     }
     if (feathers > 0 && m.meshes.size() == 2) {
-        const size_t verts = m.accessors[static_cast<size_t>(m.meshes[1].primitives[0].attributes.at("POSITION"))].count;
-        CHECK(verts == 4 * feathers || verts == 6 * feathers);
+        const std::map<std::string, int>& attributes = m.meshes[1].primitives[0].attributes;
+        const size_t verts = m.accessors[static_cast<size_t>(attributes.at("POSITION"))].count;
+        // The same vertices for every feather: 4 for the kite, more for a segmented shaft.
+        CHECK_MSG(verts % feathers == 0 && verts / feathers >= 4, std::to_string(verts) + " vertices for " + std::to_string(feathers) + " feathers");
+        for (const char* key : {"NORMAL", "TEXCOORD_0", "_FEATHER_ID"}) {
+            CHECK_MSG(attributes.count(key) == 1 && m.accessors[static_cast<size_t>(attributes.at(key))].count == verts, key);
+        }
     }
     if (frames == 0) {
         CHECK(m.animations.empty());
@@ -461,6 +466,19 @@ int default_flow() {
     return 0;
 }
 
+// --preset scales: the library's scale defaults reach the report, and the
+// scales are about half as long as the feathers of the same spacing.
+int preset_scales() {
+    const json feathers = dress("preset_feathers", {"--frames", "0", "--feathers", "300"}, 0);
+    const json scales = dress("preset_scales", {"--frames", "0", "--feathers", "300", "--preset", "scales"}, 0);
+    CHECK(scales["config"]["shaft_segments"] == 2 && scales["config"]["length_per_spacing"] == 2.0);
+    CHECK(feathers["config"]["shaft_segments"] == 1 && feathers["config"]["length_per_spacing"] == 4.0);
+    CHECK(scales["static"]["intersecting_pairs"] == 0 && scales["static"]["body_penetrations"] == 0);
+    const json over = dress("preset_override", {"--frames", "0", "--feathers", "300", "--preset", "scales", "--shaft-segments", "3"}, 0);
+    CHECK(over["config"]["shaft_segments"] == 3);
+    return 0;
+}
+
 // Per-vertex maps read from vertex attributes reach the library: a spacing
 // map of 0 leaves the left half of the sheet bare, whether it comes from a
 // float attribute or from one channel of a normalized colour.
@@ -535,6 +553,7 @@ int bad_options() {
         {{"--feathers", "10", "--spacing", "0.5"}, "alternatives"},
         {{"--fps", "0"}, "--fps"},
         {{"--flow", "1,2"}, "X,Y,Z"},
+        {{"--preset", "fur"}, "feathers|scales"},
         {{"--theta", "nan"}, "--theta"},
         {{"a.glb", "b.glb"}, "more than one input"},
         {{"--out"}, "missing value"},
@@ -614,6 +633,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"vertex_maps", vertex_maps},
     {"flow_map", flow_map},
     {"default_flow", default_flow},
+    {"preset_scales", preset_scales},
     {"truncated", truncated},
     {"not_gltf", not_gltf},
     {"missing", missing},

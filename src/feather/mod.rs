@@ -17,5 +17,5 @@ pub use pose::{
     FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, shaft_direction, tip_position,
     triangles_per_feather,
 };
-pub(crate) use shape::LENGTH_PER_SPACING;
 pub use shape::{FeatherShape, MAX_JOINTS, MAX_SEGMENTS, MAX_STATIONS, ShaftPlan};
+pub(crate) use shape::{LENGTH_PER_SPACING, WIDTH_PER_SPACING};

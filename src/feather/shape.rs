@@ -60,11 +60,24 @@ impl FeatherShape {
         }
     }
 
+    /// The shape for spacing `d` with a length and a width proportional to
+    /// it (as a multiple of `d`; the defaults are 4 and 1.75), thickness
+    /// 4 % of the width.
+    pub fn proportioned(d: f32, length_per_spacing: f32, width_per_spacing: f32) -> Self {
+        let width = width_per_spacing * d;
+        Self { length: length_per_spacing * d, width, thickness: THICKNESS_PER_WIDTH * width, ..Self::for_spacing(d) }
+    }
+
     /// The default shape for spacing `d` with global overrides: any of
     /// `length`, `width`, `thickness` that is > 0 replaces the rule (a given
     /// width also sets the default thickness, 4 % of it).
     pub fn with_overrides(d: f32, length: f32, width: f32, thickness: f32) -> Self {
-        let mut s = Self::for_spacing(d);
+        Self::for_spacing(d).overridden(length, width, thickness)
+    }
+
+    /// This shape with global overrides (see [`FeatherShape::with_overrides`]).
+    pub fn overridden(self, length: f32, width: f32, thickness: f32) -> Self {
+        let mut s = self;
         if length > 0.0 {
             s.length = length;
         }

@@ -56,6 +56,35 @@ pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
     unsafe { cfg.write(PlumageConfig::from_config(&crate::Config::default())) };
 }
 
+/// Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
+/// `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
+/// gives; `PLUMAGE_PRESET_SCALES` fish scales. An unknown preset is refused
+/// with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
+///
+/// # Safety
+/// `cfg` is NULL or points to writable memory for one `PlumageConfig`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, preset: u32) -> u32 {
+    without_system(|| {
+        if cfg.is_null() {
+            return Err(Failure::null("cfg"));
+        }
+        let preset = match preset {
+            PLUMAGE_PRESET_FEATHERS => crate::Preset::Feathers,
+            PLUMAGE_PRESET_SCALES => crate::Preset::Scales,
+            p => {
+                return Err(Failure::new(
+                    PLUMAGE_STATUS_INVALID_ARGUMENT,
+                    format!("preset {p} is not a PLUMAGE_PRESET_* value"),
+                ));
+            }
+        };
+        // SAFETY: non-NULL, points to a PlumageConfig (contract).
+        unsafe { cfg.write(PlumageConfig::from_config(&crate::Config::preset(preset))) };
+        Ok(())
+    })
+}
+
 /// Sets every pointer of `mesh` to NULL, every count to 0 and sets
 /// `struct_size`. NULL is ignored.
 ///

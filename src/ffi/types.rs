@@ -106,7 +106,21 @@ pub struct PlumageConfig {
     /// Largest bend at each joint of a segmented shaft, radians, in
     /// [0, 1.2] (default 0.4; 0 keeps feathers straight).
     pub bend_limit: f32,
+    /// Feather length as a multiple of the local spacing when
+    /// `feather_length` is 0 (default 4; scales 2), in (0, 20].
+    pub length_per_spacing: f32,
+    /// Feather width as a multiple of the local spacing when
+    /// `feather_width` is 0 (default 1.75; scales 2), in (0, 20].
+    pub width_per_spacing: f32,
 }
+
+/// `plumage_config_init_preset`: contour feathers (the defaults of
+/// `plumage_config_init`).
+pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
+/// `plumage_config_init_preset`: fish scales, short and wide (2 spacings
+/// each), nearly rigid (2 segments, bend limit 0.15 rad), in staggered rows
+/// each overlapping the next by half.
+pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
 /// completed share of it in [0, 1]. Return 0 to continue; any other value
@@ -250,6 +264,8 @@ impl PlumageConfig {
             curvature_min_scale: c.curvature_min_scale,
             shaft_segments: c.shaft_segments,
             bend_limit: c.bend_limit,
+            length_per_spacing: c.length_per_spacing,
+            width_per_spacing: c.width_per_spacing,
         }
     }
 
@@ -286,6 +302,8 @@ impl PlumageConfig {
             self.drift_tolerance,
             self.curvature_min_scale,
             self.bend_limit,
+            self.length_per_spacing,
+            self.width_per_spacing,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -318,6 +336,8 @@ impl PlumageConfig {
             curvature_min_scale: self.curvature_min_scale,
             shaft_segments: self.shaft_segments,
             bend_limit: self.bend_limit,
+            length_per_spacing: self.length_per_spacing,
+            width_per_spacing: self.width_per_spacing,
         };
         cfg.validate()?;
         Ok(cfg)
