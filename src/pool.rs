@@ -2,7 +2,18 @@
 //! every parallel algorithm runs inside [`WorkerPool::install`].
 
 use crate::error::{Error, ErrorKind, Result};
+use std::cell::Cell;
 use std::sync::Arc;
+
+thread_local! {
+    static WORKER: Cell<bool> = const { Cell::new(false) };
+}
+
+/// True on a worker thread of some [`WorkerPool`] (used by the C ABI's
+/// quiet panic hook to tell the library's threads from the host's).
+pub fn on_worker_thread() -> bool {
+    WORKER.with(Cell::get)
+}
 
 /// A private rayon pool sized from `Config::threads` (0 = all cores).
 #[derive(Clone, Debug)]
@@ -18,6 +29,7 @@ impl WorkerPool {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .thread_name(|i| format!("plumage-{i}"))
+            .start_handler(|_| WORKER.with(|w| w.set(true)))
             .build()
             .map_err(|e| Error::new(ErrorKind::InvalidArgument, format!("cannot start {n} worker threads: {e}")))?;
         Ok(Self { pool: Arc::new(pool) })
