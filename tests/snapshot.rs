@@ -182,6 +182,34 @@ fn resume_is_exact_rebuild() {
     resume_is_exact(Mode::Rebuild, true);
 }
 
+/// Two identical runs save identical bytes at every frame, whatever the
+/// thread count and whatever the run's timings: the blob holds nothing
+/// run-dependent. The blob size per feather is reported.
+#[test]
+fn identical_runs_save_identical_blobs() {
+    let shape = sphere(16, 24);
+    let blobs = |threads: usize| -> Vec<Vec<u8>> {
+        let mut sys = create(&shape, &config(Mode::Incremental, true, 600, threads));
+        let mut out = vec![sys.save_state()];
+        for k in 1..=6 {
+            sys.step(&frame(&shape.positions, k)).unwrap();
+            out.push(sys.save_state());
+        }
+        let n = sys.feather_count();
+        let last = out.last().unwrap().len();
+        eprintln!(
+            "{n} feathers, {} welded vertices: state blob {last} bytes, {:.0} bytes per feather",
+            sys.mesh().positions.len(),
+            last as f64 / n as f64
+        );
+        out
+    };
+    let first = blobs(1);
+    assert_eq!(blobs(1), first, "a second run at one thread saves other bytes");
+    assert_eq!(blobs(2), first, "a run at two threads saves other bytes");
+    assert!(first.windows(2).all(|w| w[0] != w[1]), "the frames must differ for the test to mean anything");
+}
+
 /// Loading an earlier frame after evaluate, and evaluate after a load, keep
 /// the frame count semantics (evaluate keeps it, load restores it).
 #[test]
