@@ -70,10 +70,12 @@ fn frame(rest: &[f32], k: usize) -> Vec<f32> {
 
 /// What a host sees after a call: the feathers and their triangles as
 /// bytes, which feathers were readjusted, the frame and ordering reports
-/// without their timings, and the frame count.
+/// without their timings, the frame count, and the saved state's bytes
+/// (byte-reproducible, so equal states save equal blobs).
 #[derive(Clone, Debug, PartialEq)]
 struct Observed {
     bytes: Vec<u8>,
+    state: Vec<u8>,
     readjusted: Vec<bool>,
     frame: FrameReport,
     ordering: OrderingReport,
@@ -97,7 +99,8 @@ fn observe(sys: &System) -> Observed {
         ..sys.frame_report().unwrap()
     };
     let ordering = OrderingReport { seconds: 0.0, ..sys.ordering_report().unwrap() };
-    Observed { bytes, readjusted: sys.readjusted().to_vec(), frame, ordering, frames_stepped: sys.frames_stepped() }
+    let (readjusted, frames_stepped) = (sys.readjusted().to_vec(), sys.frames_stepped());
+    Observed { bytes, state: sys.save_state(), readjusted, frame, ordering, frames_stepped }
 }
 
 fn create(shape: &Shape, config: &Config) -> System {
@@ -238,8 +241,8 @@ fn small() -> (Shape, Config, System, Vec<u8>) {
     (shape, cfg, sys, blob)
 }
 
-/// The system refused everything since `before`: its exports are
-/// unchanged and its next step equals a twin's that never saw a refusal.
+/// The system refused everything since `before`: its exports and its
+/// saved state's bytes are unchanged and its next step equals a twin's that never saw a refusal.
 fn assert_unchanged(sys: &mut System, before: &Observed, shape: &Shape, cfg: &Config) {
     assert_eq!(&observe(sys), before);
     let mut twin = create(shape, cfg);
