@@ -185,8 +185,15 @@ impl Config {
         if self.threads > 1024 {
             return bad(format!("config.threads must be at most 1024 (got {})", self.threads));
         }
-        if self.target_feathers > 10_000_000 {
-            return bad(format!("config.target_feathers must be at most 10000000 (got {})", self.target_feathers));
+        if self.target_feathers > crate::limits::MAX_FEATHERS {
+            return Err(Error::new(
+                ErrorKind::LimitExceeded,
+                format!(
+                    "config.target_feathers is {} but at most {} feathers are supported",
+                    self.target_feathers,
+                    crate::limits::MAX_FEATHERS
+                ),
+            ));
         }
         if !self.flow_axis.is_finite() || self.flow_axis.length_squared() < 1e-12 {
             return bad(format!("config.flow_axis must be finite and non-zero (got {:?})", self.flow_axis));
