@@ -93,6 +93,7 @@ impl Fields {
                 *s *= b;
             }
         }
+        clamp_spacing_range(&mut spacing_scale);
         Ok(Self {
             directions,
             spacing_scale,
@@ -170,6 +171,22 @@ impl Fields {
 fn blend_at(values: &[f32], surface: &Surface, p: SurfacePoint) -> f32 {
     let tri = surface.triangles()[p.face as usize];
     (0..3).map(|k| values[tri[k] as usize] * p.bary[k]).sum()
+}
+
+/// Brings positive spacing multipliers within
+/// [`MAX_SPACING_RATIO`](crate::limits::MAX_SPACING_RATIO) of their median
+/// either way (0, bare skin, stays 0): the sampler's rejection and its grid
+/// queries take time in proportion to the density ratio.
+fn clamp_spacing_range(scales: &mut [f32]) {
+    let mut positive: Vec<f32> = scales.iter().copied().filter(|&s| s > 0.0).collect();
+    if positive.is_empty() {
+        return;
+    }
+    let mid = positive.len() / 2;
+    let median = *positive.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let ratio = crate::limits::MAX_SPACING_RATIO;
+    let (lo, hi) = (median / ratio, median * ratio);
+    scales.iter_mut().filter(|s| **s > 0.0).for_each(|s| *s = s.clamp(lo, hi));
 }
 
 fn multiplier(name: &str, values: Option<&[f32]>, n: usize) -> Result<Vec<f32>> {

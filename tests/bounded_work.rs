@@ -174,3 +174,26 @@ fn unusable_frames_leave_the_previous_frame_in_place() {
     sys.step(&wave(6)).unwrap();
     assert!(sys.feather_triangles().iter().flatten().flatten().all(|x| x.is_finite()));
 }
+
+/// Found by `fuzz_create`: per-vertex spacing multipliers far apart (one
+/// vertex at 1e-20 or 1e20 of the rest) made the sampling's coverage probes
+/// walk ~10^18 grid cells per query (the run never ended), then the pool's
+/// rejection draw run for 75 s. Grid queries now scan the points when the
+/// walk would be longer, and multipliers are clamped to within
+/// `MAX_SPACING_RATIO` of their median.
+#[test]
+fn spacing_multipliers_far_apart_finish() {
+    let shape = cylinder(1.0, 3.0, 24, 12);
+    for extreme in [1e-20f32, 1e-6, 1e-2, 1e2, 1e6, 1e20] {
+        let mut scale = vec![1.0f32; shape.vertex_count()];
+        scale[17] = extreme;
+        let mesh = MeshInput { spacing_scale: Some(&scale), ..MeshInput::new(&shape.positions, &shape.indices) };
+        let t = Instant::now();
+        let result = System::new(&Config { target_feathers: 300, threads: 1, ..Config::default() }, &mesh);
+        let secs = t.elapsed().as_secs_f64();
+        let sys = result.unwrap_or_else(|e| panic!("multiplier {extreme:e}: {e}"));
+        assert!(sys.feather_count() > 0, "multiplier {extreme:e}");
+        eprintln!("multiplier {extreme:e}: {} feathers in {secs:.2} s", sys.feather_count());
+        assert!(secs < 10.0, "multiplier {extreme:e}: {secs:.1} s");
+    }
+}
