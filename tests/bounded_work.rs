@@ -14,7 +14,10 @@ fn scaled(shape: &Shape, s: f32) -> Shape {
     Shape { positions: shape.positions.iter().map(|x| x * s).collect(), indices: shape.indices.clone() }
 }
 
-/// Exploration: `PLUMAGE_PROBE=case cargo test --release --test bounded_work probe -- --ignored --nocapture`.
+/// Exploration and the README's figures: `PLUMAGE_PROBE=CASE cargo test
+/// --release --test bounded_work probe -- --ignored --nocapture`, CASE one
+/// of target1e6, target1e7, spacing1e-9, spacing1e-3, huge, big, tiny,
+/// tinier, scaleS, offsetO, feathersN.
 #[test]
 #[ignore]
 fn probe() {
@@ -30,6 +33,11 @@ fn probe() {
         "big" => (scaled(&base, 1e18), Config { target_feathers: 2000, ..Config::default() }),
         "tiny" => (scaled(&base, 1e-20), Config { target_feathers: 2000, ..Config::default() }),
         "tinier" => (scaled(&base, 1e-35), Config { target_feathers: 2000, ..Config::default() }),
+        other if other.starts_with("feathers") => {
+            // A finer cylinder (24 576 triangles) dressed with N feathers.
+            let n: usize = other[8..].parse().unwrap();
+            (cylinder(1.0, 3.0, 128, 96), Config { target_feathers: n, threads: 1, ..Config::default() })
+        }
         other if other.starts_with("offset") => {
             let o: f32 = other[6..].parse().unwrap();
             let mut b = base.clone();
@@ -45,9 +53,10 @@ fn probe() {
     let t = Instant::now();
     let r = System::new(&cfg, &MeshInput::new(&shape.positions, &shape.indices));
     eprintln!(
-        "{case}: {:?} in {:.2} s",
+        "{case}: {:?} in {:.2} s, peak RSS {} KiB",
         r.as_ref().map(|s| s.feather_count()).map_err(|e| e.to_string()),
-        t.elapsed().as_secs_f64()
+        t.elapsed().as_secs_f64(),
+        common::fuzz::peak_rss_kib()
     );
 }
 
