@@ -189,8 +189,9 @@
 #define PLUMAGE_MAX_FEATHERS 2000000
 
 /**
- * Largest coordinate magnitude accepted in a mesh or a frame (model
- * units); beyond it, PLUMAGE_STATUS_LIMIT_EXCEEDED.
+ * Largest coordinate magnitude accepted in a mesh or a frame, and largest
+ * spacing, feather length, width and thickness (model units); beyond it,
+ * PLUMAGE_STATUS_LIMIT_EXCEEDED.
  */
 #define PLUMAGE_MAX_COORDINATE 1e9
 

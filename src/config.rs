@@ -159,6 +159,15 @@ impl Config {
                 return bad(format!("config.{name} must be finite and >= 0 (got {v})"));
             }
         }
+        let limit = crate::limits::MAX_COORDINATE;
+        for (name, v) in finite_nonneg.iter().take(4) {
+            if *v > limit {
+                return Err(Error::new(
+                    ErrorKind::LimitExceeded,
+                    format!("config.{name} is {v:e}, beyond the supported {limit:e} model units"),
+                ));
+            }
+        }
         if !self.theta.is_finite() {
             return bad(format!("config.theta must be finite (got {})", self.theta));
         }

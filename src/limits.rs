@@ -9,8 +9,9 @@
 /// few kilobytes a feather, so this is a few gigabytes at most.
 pub const MAX_FEATHERS: usize = 2_000_000;
 
-/// Largest coordinate magnitude accepted in a mesh or a frame, in model
-/// units. Squared cross products of triangle edges (normals, areas) are
+/// Largest coordinate magnitude accepted in a mesh or a frame, and largest
+/// length accepted in the configuration (spacing, feather length, width and
+/// thickness), in model units (a spacing of f32::MAX gave NaN feathers). Squared cross products of triangle edges (normals, areas) are
 /// computed in f32: with coordinates beyond about 1e10 they overflow and
 /// the surface can no longer be used (measured: a cylinder scaled by 1e11
 /// gave one feather after 10 s and 880 MB). Meshes so small that their

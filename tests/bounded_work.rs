@@ -206,3 +206,32 @@ fn spacing_multipliers_far_apart_finish() {
         assert!(secs < 10.0, "multiplier {extreme:e}: {secs:.1} s");
     }
 }
+
+/// Found by `fuzz_create`: a spacing of f32::MAX planted one feather whose
+/// triangles were NaN. Lengths beyond `MAX_COORDINATE` are refused; at the
+/// limit the feathers are finite.
+#[test]
+fn lengths_beyond_the_limit_are_refused_and_at_it_are_finite() {
+    let shape = cylinder(1.0, 3.0, 24, 12);
+    type Set = fn(&mut Config, f32);
+    let fields: [(&str, Set); 4] = [
+        ("spacing", |c, x| c.spacing = x),
+        ("feather_length", |c, x| c.feather_length = x),
+        ("feather_width", |c, x| c.feather_width = x),
+        ("feather_thickness", |c, x| c.feather_thickness = x),
+    ];
+    for (name, set) in fields {
+        for x in [f32::MAX, 1e30, 2.0 * MAX_COORDINATE] {
+            let mut cfg = Config { target_feathers: 200, threads: 1, ..Config::default() };
+            set(&mut cfg, x);
+            let err = refused_at_once(&shape, &cfg);
+            assert_eq!(err.kind(), ErrorKind::LimitExceeded, "{name} = {x:e}: {err}");
+            assert!(err.message().contains(name), "{err}");
+        }
+        let mut cfg = Config { target_feathers: 200, threads: 1, ..Config::default() };
+        set(&mut cfg, MAX_COORDINATE);
+        let sys = create(&shape, &cfg).unwrap_or_else(|e| panic!("{name} at the limit: {e}"));
+        let bad = sys.feather_triangles().iter().flatten().flatten().filter(|x| !x.is_finite()).count();
+        assert_eq!(bad, 0, "{name} at the limit: {bad} non-finite coordinates");
+    }
+}
