@@ -7,7 +7,9 @@
 //!   few seconds, the one `./scripts/test.sh` does);
 //! - `PLUMAGE_FUZZ_SEED=S`: the run seed (default fixed, so the short run is
 //!   the same every time);
-//! - `PLUMAGE_FUZZ_CASE=I`: replay case I only (printed when a case fails).
+//! - `PLUMAGE_FUZZ_CASE=I`: replay case I only (printed when a case fails);
+//! - `PLUMAGE_FUZZ_SECONDS=T`: stop after the case running at T seconds
+//!   (a long run that fits a time budget; the count run is printed).
 //!
 //! The C ABI is driven as a host would drive it, and every call's status
 //! must be a named one other than `PANIC`: a caught panic is a crash found.
@@ -126,7 +128,11 @@ pub fn run(target: &str, default_cases: u64, mut case: impl FnMut(&mut Rng, &mut
     let start = Instant::now();
     let (mut slowest, mut slowest_case) = (0.0f64, 0u64);
     let mut ran = 0u64;
+    let budget = env_u64("PLUMAGE_FUZZ_SECONDS").map(|s| s as f64);
     for i in 0..cases {
+        if budget.is_some_and(|b| start.elapsed().as_secs_f64() > b) {
+            break;
+        }
         if only.is_some_and(|o| o != i) {
             continue;
         }
