@@ -19,9 +19,11 @@ pub const MAX_FEATHERS: usize = 2_000_000;
 /// as degenerate.
 pub const MAX_COORDINATE: f32 = 1e9;
 
-/// Positive per-vertex spacing multipliers (a spacing map times the
-/// curvature refinement) are clamped to within this factor of their median
-/// either way: a density ratio of 10^4 at most. Far wider ratios made the
-/// sampler's rejection and coverage queries run for minutes (found by
-/// `fuzz_create`: one vertex at 1e-20 took 75 s for 300 feathers).
-pub const MAX_SPACING_RATIO: f32 = 100.0;
+/// Positive per-vertex multipliers (a spacing map times the curvature
+/// refinement; length and width maps) are clamped to within this factor of
+/// their median either way: a density ratio of 10^4 at most. Far wider
+/// ratios made the sampler's rejection and coverage queries run for minutes
+/// (found by `fuzz_create`: one vertex at 1e-20 took 75 s for 300
+/// feathers) and a huge length multiplier gave NaN feathers (fuzz_create
+/// case 3000).
+pub const MAX_MULTIPLIER_RATIO: f32 = 100.0;

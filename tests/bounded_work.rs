@@ -189,7 +189,7 @@ fn unusable_frames_leave_the_previous_frame_in_place() {
 /// walk ~10^18 grid cells per query (the run never ended), then the pool's
 /// rejection draw run for 75 s. Grid queries now scan the points when the
 /// walk would be longer, and multipliers are clamped to within
-/// `MAX_SPACING_RATIO` of their median.
+/// `MAX_MULTIPLIER_RATIO` of their median.
 #[test]
 fn spacing_multipliers_far_apart_finish() {
     let shape = cylinder(1.0, 3.0, 24, 12);
@@ -233,5 +233,28 @@ fn lengths_beyond_the_limit_are_refused_and_at_it_are_finite() {
         let sys = create(&shape, &cfg).unwrap_or_else(|e| panic!("{name} at the limit: {e}"));
         let bad = sys.feather_triangles().iter().flatten().flatten().filter(|x| !x.is_finite()).count();
         assert_eq!(bad, 0, "{name} at the limit: {bad} non-finite coordinates");
+    }
+}
+
+/// Found by `fuzz_create` (case 3000): a length map with a huge value on a
+/// thin box gave NaN feather triangles. Length and width multipliers are
+/// clamped like the spacing ones.
+#[test]
+fn huge_length_and_width_multipliers_give_finite_feathers() {
+    let shape = common::shapes::thin_box(2.5, 2.3, 7e-5, 5, 2);
+    for extreme in [f32::MAX, 1e30, 1e-30] {
+        let mut scale = vec![1.0f32; shape.vertex_count()];
+        scale[3] = extreme;
+        for width in [false, true] {
+            let base = MeshInput::new(&shape.positions, &shape.indices);
+            let mesh = if width {
+                MeshInput { width_scale: Some(&scale), ..base }
+            } else {
+                MeshInput { length_scale: Some(&scale), ..base }
+            };
+            let sys = System::new(&Config { target_feathers: 80, threads: 1, ..Config::default() }, &mesh).unwrap();
+            let bad = sys.feather_triangles().iter().flatten().flatten().filter(|x| !x.is_finite()).count();
+            assert_eq!(bad, 0, "multiplier {extreme:e} (width {width}): {bad} non-finite coordinates");
+        }
     }
 }
