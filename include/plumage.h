@@ -163,6 +163,13 @@
 #define PLUMAGE_STATUS_NOT_AVAILABLE 16
 
 /**
+ * The request is outside the documented limits (feather count, estimated
+ * root count of a spacing, coordinate magnitude); refused up front, before
+ * anything large is allocated. The message names the limit.
+ */
+#define PLUMAGE_STATUS_LIMIT_EXCEEDED 17
+
+/**
  * `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
  */
 #define PLUMAGE_SAMPLER_GUIDED 0
@@ -219,6 +226,20 @@
  * Progress phase: the height-field adjustment of the feathers.
  */
 #define PLUMAGE_PHASE_ADJUSTING 3
+
+/**
+ * Most feathers a system may hold: a larger `target_feathers`, or a
+ * `spacing` that would plant more, is refused with
+ * PLUMAGE_STATUS_LIMIT_EXCEEDED before anything large is allocated.
+ */
+#define PLUMAGE_MAX_FEATHERS 2000000
+
+/**
+ * Largest coordinate magnitude accepted in a mesh or a frame, and largest
+ * spacing, feather length, width and thickness (model units); beyond it,
+ * PLUMAGE_STATUS_LIMIT_EXCEEDED.
+ */
+#define PLUMAGE_MAX_COORDINATE 1e9
 
 /**
  * A tip farther than this off the skin, in feather lengths, is a bristle.

@@ -288,10 +288,15 @@ impl Coat {
 /// frame. Root frames, vertex normals and the body index are functions of
 /// the positions, so they are recomputed on load rather than stored.
 ///
+/// The blob is byte-reproducible: two identical runs save identical bytes,
+/// so the report timings (run-dependent) are not stored; a loaded coat's
+/// timings are 0 (loading adjusted nothing).
+///
 /// Layout: frame index (u64); welded positions (u64 count, then xyz f32
-/// each); poses (u64 count of floats, then pitch, roll, scale and the S − 1 joint bends, f32 each); the ordering
-/// report (four u64 counts, seconds f64); the frame report (frame index and
-/// nine counts as u64, three timings f64); the neighbourhoods
+/// each); poses (u64 count of floats, then [`write_pose`] each: pitch,
+/// roll, scale and the S − 1 joint bends); the ordering report (four u64
+/// counts); the frame report (frame index and ten counts as u64, then the
+/// level count u64); the neighbourhoods
 /// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]);
 /// the staleness ([`Staleness::write_state`]).
 impl Coat {
@@ -302,18 +307,13 @@ impl Coat {
         for p in &self.positions {
             p.to_array().iter().for_each(|&x| w.f32(x));
         }
-        w.u64(((3 + joints) * self.poses.len()) as u64);
-        for pose in &self.poses {
-            w.f32(pose.pitch);
-            w.f32(pose.roll);
-            w.f32(pose.scale);
-            pose.bends[..joints].iter().for_each(|&b| w.f32(b));
-        }
+        w.u64(((POSE_FLOATS + joints) * self.poses.len()) as u64);
+        self.poses.iter().for_each(|pose| write_pose(w, pose, joints));
         // Destructured in full (as in `read_state`) so that a new report
         // field cannot be forgotten here.
-        let OrderingReport { pairs, edges, dropped_edges, violations, seconds } = self.ordering_report;
+        // Timings are left out: they differ between identical runs.
+        let OrderingReport { pairs, edges, dropped_edges, violations, seconds: _ } = self.ordering_report;
         [pairs, edges, dropped_edges, violations].iter().for_each(|&c| w.u64(c as u64));
-        w.f64(seconds);
         let FrameReport {
             frame_index,
             adjusted,
@@ -326,17 +326,16 @@ impl Coat {
             reversals_refused,
             cycles_broken,
             clamped,
-            reorder_seconds,
-            adjust_seconds,
-            step_seconds,
-            neighbourhood_seconds,
+            reorder_seconds: _,
+            adjust_seconds: _,
+            step_seconds: _,
+            neighbourhood_seconds: _,
             levels,
         } = self.frame_report;
         w.u64(frame_index);
         [adjusted, deformed, seeds, verified].iter().for_each(|&c| w.u64(c as u64));
         w.u64(collision_tests);
         [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
-        [reorder_seconds, adjust_seconds, step_seconds, neighbourhood_seconds].iter().for_each(|&s| w.f64(s));
         w.u64(levels as u64);
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
@@ -363,32 +362,17 @@ impl Coat {
             positions.push(p);
         }
         let joints = dressing.shaft_joints();
-        r.len(4, Some((3 + joints) * n))?;
-        let limits = &dressing.adjust_params;
+        r.len(4, Some((POSE_FLOATS + joints) * n))?;
         let mut poses = Vec::with_capacity(n);
         for _ in 0..n {
-            let mut pose = FeatherPose::new(r.f32()?, r.f32()?).with_scale(r.f32()?);
-            for b in &mut pose.bends[..joints] {
-                *b = r.f32()?;
-            }
-            let bent_within = pose.bends.iter().all(|b| b.abs() <= limits.bend_limit);
-            if !(bent_within
-                && pose.pitch >= limits.min_pitch
-                && pose.pitch <= limits.max_pitch
-                && pose.roll.abs() <= limits.max_roll
-                && (pose.scale >= limits.min_scale || pose.scale == 0.0)
-                && pose.scale <= 1.0)
-            {
-                return Err(invalid_state("a saved feather pose lies outside the pitch, roll, size and bend limits"));
-            }
-            poses.push(pose);
+            poses.push(read_pose(r, dressing, joints)?);
         }
         let ordering_report = OrderingReport {
             pairs: count(r)?,
             edges: count(r)?,
             dropped_edges: count(r)?,
             violations: count(r)?,
-            seconds: r.f64()?,
+            seconds: 0.0,
         };
         let frame_report = FrameReport {
             frame_index: r.u64()?,
@@ -402,10 +386,10 @@ impl Coat {
             reversals_refused: count(r)?,
             cycles_broken: count(r)?,
             clamped: count(r)?,
-            reorder_seconds: r.f64()?,
-            adjust_seconds: r.f64()?,
-            step_seconds: r.f64()?,
-            neighbourhood_seconds: r.f64()?,
+            reorder_seconds: 0.0,
+            adjust_seconds: 0.0,
+            step_seconds: 0.0,
+            neighbourhood_seconds: 0.0,
             levels: count(r)?,
         };
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
@@ -428,6 +412,39 @@ impl Coat {
         coat.body.rebuild(&coat.positions, &dressing.triangles);
         Ok(coat)
     }
+}
+
+/// Floats of a pose before its bends.
+const POSE_FLOATS: usize = 3;
+
+/// One feather's pose in a state blob: pitch, roll, scale and the bends of
+/// its `joints` joints (f32 each). The one place the pose's encoding lives,
+/// with [`read_pose`].
+fn write_pose(w: &mut Writer, pose: &FeatherPose, joints: usize) {
+    w.f32(pose.pitch);
+    w.f32(pose.roll);
+    w.f32(pose.scale);
+    pose.bends[..joints].iter().for_each(|&b| w.f32(b));
+}
+
+/// Reads a pose of [`write_pose`], refusing one outside the adjustment's limits.
+fn read_pose(r: &mut Reader<'_>, dressing: &Dressing, joints: usize) -> Result<FeatherPose> {
+    let limits = &dressing.adjust_params;
+    let mut pose = FeatherPose::new(r.f32()?, r.f32()?).with_scale(r.f32()?);
+    for b in &mut pose.bends[..joints] {
+        *b = r.f32()?;
+    }
+    let bent_within = pose.bends.iter().all(|b| b.abs() <= limits.bend_limit);
+    if !(bent_within
+        && pose.pitch >= limits.min_pitch
+        && pose.pitch <= limits.max_pitch
+        && pose.roll.abs() <= limits.max_roll
+        && (pose.scale >= limits.min_scale || pose.scale == 0.0)
+        && pose.scale <= 1.0)
+    {
+        return Err(invalid_state("a saved feather pose lies outside the pitch, roll, size and bend limits"));
+    }
+    Ok(pose)
 }
 
 /// A count stored as u64 that must fit a `usize`.

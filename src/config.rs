@@ -229,6 +229,15 @@ impl Config {
                 return bad(format!("config.{name} must be in (0, 20] (got {v})"));
             }
         }
+        let limit = crate::limits::MAX_COORDINATE;
+        for (name, v) in finite_nonneg.iter().take(4) {
+            if *v > limit {
+                return Err(Error::new(
+                    ErrorKind::LimitExceeded,
+                    format!("config.{name} is {v:e}, beyond the supported {limit:e} model units"),
+                ));
+            }
+        }
         if !self.theta.is_finite() {
             return bad(format!("config.theta must be finite (got {})", self.theta));
         }
@@ -255,8 +264,15 @@ impl Config {
         if self.threads > 1024 {
             return bad(format!("config.threads must be at most 1024 (got {})", self.threads));
         }
-        if self.target_feathers > 10_000_000 {
-            return bad(format!("config.target_feathers must be at most 10000000 (got {})", self.target_feathers));
+        if self.target_feathers > crate::limits::MAX_FEATHERS {
+            return Err(Error::new(
+                ErrorKind::LimitExceeded,
+                format!(
+                    "config.target_feathers is {} but at most {} feathers are supported",
+                    self.target_feathers,
+                    crate::limits::MAX_FEATHERS
+                ),
+            ));
         }
         if !self.flow_axis.is_finite() || (self.flow_axis != Vec3::ZERO && self.flow_axis.length_squared() < 1e-12) {
             return bad(format!(

@@ -26,6 +26,9 @@ pub enum ErrorKind {
     Interrupted,
     /// A saved state blob is truncated, foreign or of another system.
     InvalidState,
+    /// The request is outside the documented limits ([`crate::limits`]):
+    /// refused before anything large is allocated.
+    LimitExceeded,
 }
 
 /// An error with a message meant for a person.

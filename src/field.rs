@@ -93,11 +93,12 @@ impl Fields {
                 *s *= b;
             }
         }
+        clamp_multiplier_range(&mut spacing_scale);
         Ok(Self {
             directions,
             spacing_scale,
-            length_scale: multiplier("length_scale", length_scale, n)?,
-            width_scale: multiplier("width_scale", width_scale, n)?,
+            length_scale: clamped(multiplier("length_scale", length_scale, n)?),
+            width_scale: clamped(multiplier("width_scale", width_scale, n)?),
         })
     }
 
@@ -170,6 +171,29 @@ impl Fields {
 fn blend_at(values: &[f32], surface: &Surface, p: SurfacePoint) -> f32 {
     let tri = surface.triangles()[p.face as usize];
     (0..3).map(|k| values[tri[k] as usize] * p.bary[k]).sum()
+}
+
+/// `scales` after [`clamp_multiplier_range`].
+fn clamped(mut scales: Vec<f32>) -> Vec<f32> {
+    clamp_multiplier_range(&mut scales);
+    scales
+}
+
+/// Brings positive multipliers (spacing, length, width) within
+/// [`MAX_MULTIPLIER_RATIO`](crate::limits::MAX_MULTIPLIER_RATIO) of their median
+/// either way (0 stays 0): the sampler's rejection and its grid queries take
+/// time in proportion to the density ratio, and a feather 10^38 times longer
+/// than its neighbours has no finite geometry.
+fn clamp_multiplier_range(scales: &mut [f32]) {
+    let mut positive: Vec<f32> = scales.iter().copied().filter(|&s| s > 0.0).collect();
+    if positive.is_empty() {
+        return;
+    }
+    let mid = positive.len() / 2;
+    let median = *positive.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let ratio = crate::limits::MAX_MULTIPLIER_RATIO;
+    let (lo, hi) = (median / ratio, median * ratio);
+    scales.iter_mut().filter(|s| **s > 0.0).for_each(|s| *s = s.clamp(lo, hi));
 }
 
 fn multiplier(name: &str, values: Option<&[f32]>, n: usize) -> Result<Vec<f32>> {

@@ -19,6 +19,7 @@ pub mod ffi;
 pub mod field;
 pub mod geometry;
 pub mod interior;
+pub mod limits;
 pub mod mesh;
 pub mod ordering;
 pub mod pool;

@@ -14,8 +14,19 @@
 //! call and leaves the thread as it was.
 
 use crate::error::{Error, ErrorKind, Result};
+use std::cell::Cell;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::{Arc, Mutex, OnceLock, Weak};
+
+thread_local! {
+    static WORKER: Cell<bool> = const { Cell::new(false) };
+}
+
+/// True on a worker thread of some [`WorkerPool`] (used by the C ABI's
+/// quiet panic hook to tell the library's threads from the host's).
+pub fn on_worker_thread() -> bool {
+    WORKER.with(Cell::get)
+}
 
 /// A rayon pool sized from `Config::threads` (0 = all cores, shared), or
 /// the calling thread alone (1).
@@ -83,6 +94,7 @@ fn build_pool(n: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .thread_name(|i| format!("plumage-{i}"))
+        .start_handler(|_| WORKER.with(|w| w.set(true)))
         .build()
         .map_err(|e| Error::new(ErrorKind::InvalidArgument, format!("cannot start {n} worker threads: {e}")))
 }

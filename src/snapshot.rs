@@ -9,9 +9,9 @@ use crate::rng::mix64;
 const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
 /// Version of the payload layout; bump on any change. 4: the staleness
 /// keeps each feather's recorded placements (net motion). 5: the frame
-/// figures hold the neighbourhood time and the level count. Blobs of
-/// another version are refused.
-pub(crate) const FORMAT_VERSION: u32 = 5;
+/// figures hold the neighbourhood time and the level count. 6: no timings
+/// (the blob is byte-reproducible). Blobs of another version are refused.
+pub(crate) const FORMAT_VERSION: u32 = 6;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 
@@ -32,6 +32,13 @@ impl Writer {
         Self { bytes }
     }
 
+    /// Bytes written so far (header included).
+    pub fn len(&self) -> usize {
+        self.bytes.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
     pub fn u8(&mut self, v: u8) {
         self.bytes.push(v);
     }

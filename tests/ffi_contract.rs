@@ -79,7 +79,7 @@ fn versions_and_status_names() {
     assert_eq!(v, env!("CARGO_PKG_VERSION"));
     assert_eq!(plumage_abi_version(), PLUMAGE_ABI_VERSION);
     let mut names = std::collections::BTreeSet::new();
-    for s in 0..=PLUMAGE_STATUS_NOT_AVAILABLE {
+    for s in 0..=PLUMAGE_STATUS_LIMIT_EXCEEDED {
         let n = name(s);
         assert_ne!(n, "UNKNOWN_STATUS", "status {s} has a name");
         assert!(names.insert(n), "names are distinct");
@@ -183,6 +183,17 @@ fn bad_configs_are_refused() {
     expect_refused(&PlumageConfig { curvature_min_scale: f32::NAN, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
     expect_refused(&PlumageConfig { drift_tolerance: -0.1, ..cfg }, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
     expect_refused(&PlumageConfig { drift_tolerance: f32::INFINITY, ..cfg }, &d, PLUMAGE_STATUS_NON_FINITE);
+    // Requests beyond the documented limits.
+    expect_refused(&PlumageConfig { target_feathers: 1_000_000_000, ..cfg }, &d, PLUMAGE_STATUS_LIMIT_EXCEEDED);
+    expect_refused(
+        &PlumageConfig { target_feathers: PLUMAGE_MAX_FEATHERS + 1, ..cfg },
+        &d,
+        PLUMAGE_STATUS_LIMIT_EXCEEDED,
+    );
+    assert!(thread_error().contains(&PLUMAGE_MAX_FEATHERS.to_string()), "{}", thread_error());
+    expect_refused(&PlumageConfig { spacing: 1e-9, ..cfg }, &d, PLUMAGE_STATUS_LIMIT_EXCEEDED);
+    let huge: Vec<f32> = pos.iter().map(|x| x * 2.0 * PLUMAGE_MAX_COORDINATE).collect();
+    expect_refused(&cfg, &desc(&huge, &idx), PLUMAGE_STATUS_LIMIT_EXCEEDED);
 }
 
 #[test]
@@ -250,6 +261,9 @@ fn bad_frames_are_refused_and_leave_the_system_usable() {
     nan[4] = f32::NAN;
     assert_eq!(unsafe { plumage_system_step(sys, nan.as_ptr(), n) }, PLUMAGE_STATUS_NON_FINITE);
     assert_eq!(unsafe { plumage_system_evaluate(sys, nan.as_ptr(), n) }, PLUMAGE_STATUS_NON_FINITE);
+    let mut far = pos.clone();
+    far[5] = 2.0 * PLUMAGE_MAX_COORDINATE;
+    assert_eq!(unsafe { plumage_system_step(sys, far.as_ptr(), n) }, PLUMAGE_STATUS_LIMIT_EXCEEDED);
     // Queries with NULL outputs.
     assert_eq!(unsafe { plumage_system_feather_count(sys, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
     assert_eq!(unsafe { plumage_system_feather_count(null(), null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);

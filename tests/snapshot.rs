@@ -70,10 +70,12 @@ fn frame(rest: &[f32], k: usize) -> Vec<f32> {
 
 /// What a host sees after a call: the feathers and their triangles as
 /// bytes, which feathers were readjusted, the frame and ordering reports
-/// without their timings, and the frame count.
+/// without their timings, the frame count, and the saved state's bytes
+/// (byte-reproducible, so equal states save equal blobs).
 #[derive(Clone, Debug, PartialEq)]
 struct Observed {
     bytes: Vec<u8>,
+    state: Vec<u8>,
     readjusted: Vec<bool>,
     frame: FrameReport,
     ordering: OrderingReport,
@@ -97,7 +99,8 @@ fn observe(sys: &System) -> Observed {
         ..sys.frame_report().unwrap()
     };
     let ordering = OrderingReport { seconds: 0.0, ..sys.ordering_report().unwrap() };
-    Observed { bytes, readjusted: sys.readjusted().to_vec(), frame, ordering, frames_stepped: sys.frames_stepped() }
+    let (readjusted, frames_stepped) = (sys.readjusted().to_vec(), sys.frames_stepped());
+    Observed { bytes, state: sys.save_state(), readjusted, frame, ordering, frames_stepped }
 }
 
 fn create(shape: &Shape, config: &Config) -> System {
@@ -182,6 +185,34 @@ fn resume_is_exact_rebuild() {
     resume_is_exact(Mode::Rebuild, true);
 }
 
+/// Two identical runs save identical bytes at every frame, whatever the
+/// thread count and whatever the run's timings: the blob holds nothing
+/// run-dependent. The blob size per feather is reported.
+#[test]
+fn identical_runs_save_identical_blobs() {
+    let shape = sphere(16, 24);
+    let blobs = |threads: usize| -> Vec<Vec<u8>> {
+        let mut sys = create(&shape, &config(Mode::Incremental, true, 600, threads));
+        let mut out = vec![sys.save_state()];
+        for k in 1..=6 {
+            sys.step(&frame(&shape.positions, k)).unwrap();
+            out.push(sys.save_state());
+        }
+        let n = sys.feather_count();
+        let last = out.last().unwrap().len();
+        eprintln!(
+            "{n} feathers, {} welded vertices: state blob {last} bytes, {:.0} bytes per feather",
+            sys.mesh().positions.len(),
+            last as f64 / n as f64
+        );
+        out
+    };
+    let first = blobs(1);
+    assert_eq!(blobs(1), first, "a second run at one thread saves other bytes");
+    assert_eq!(blobs(2), first, "a run at two threads saves other bytes");
+    assert!(first.windows(2).all(|w| w[0] != w[1]), "the frames must differ for the test to mean anything");
+}
+
 /// Loading an earlier frame after evaluate, and evaluate after a load, keep
 /// the frame count semantics (evaluate keeps it, load restores it).
 #[test]
@@ -210,8 +241,8 @@ fn small() -> (Shape, Config, System, Vec<u8>) {
     (shape, cfg, sys, blob)
 }
 
-/// The system refused everything since `before`: its exports are
-/// unchanged and its next step equals a twin's that never saw a refusal.
+/// The system refused everything since `before`: its exports and its
+/// saved state's bytes are unchanged and its next step equals a twin's that never saw a refusal.
 fn assert_unchanged(sys: &mut System, before: &Observed, shape: &Shape, cfg: &Config) {
     assert_eq!(&observe(sys), before);
     let mut twin = create(shape, cfg);

@@ -5,17 +5,24 @@
 //! behind `catch_unwind`. A caught panic poisons the handle. Error messages go
 //! to the handle's last-error slot, or to a thread-local slot when there is
 //! no handle (e.g. a refused create).
+//!
+//! Silence: the first boundary call installs a process-wide panic hook once.
+//! A panic on a thread that is inside a boundary call, or on a worker thread
+//! of a system's pool while some boundary call is running, prints nothing;
+//! its message and location are kept for `plumage_system_last_error`. Every
+//! other panic goes to the hook that was installed before (the host's own,
+//! or Rust's default), so the host's hook keeps working for its own code.
 
 use super::status::*;
 use super::types::HostProgress;
 use crate::System;
 use crate::progress::Progress;
 use std::any::Any;
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::CString;
-use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::panic::{AssertUnwindSafe, PanicHookInfo, catch_unwind};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, Once};
 
 /// An opaque feathering system. Create with `plumage_system_create`, free
 /// with `plumage_system_destroy`.
@@ -86,13 +93,72 @@ fn to_cstring(message: &str) -> CString {
     CString::new(message.replace('\0', " ")).unwrap_or_default()
 }
 
+thread_local! {
+    /// Depth of boundary calls on this thread (a callback may re-enter).
+    static INSIDE: Cell<u32> = const { Cell::new(0) };
+}
+
+/// Boundary calls running in the process (any thread).
+static ACTIVE: AtomicUsize = AtomicUsize::new(0);
+
+/// Where the last quiet panic happened ("file:line"), for its message.
+static LAST_LOCATION: Mutex<Option<String>> = Mutex::new(None);
+
+type Hook = Box<dyn Fn(&PanicHookInfo<'_>) + Sync + Send + 'static>;
+
+/// Installs the quiet hook once, chaining to the hook found at that moment.
+fn install_quiet_hook() {
+    static INSTALL: Once = Once::new();
+    INSTALL.call_once(|| std::panic::set_hook(quiet_hook(std::panic::take_hook())));
+}
+
+/// The quiet hook: Plumage's panics are recorded, every other goes to `previous`.
+fn quiet_hook(previous: Hook) -> Hook {
+    Box::new(move |info| {
+        let ours = INSIDE.with(Cell::get) > 0 || (crate::pool::on_worker_thread() && ACTIVE.load(Ordering::SeqCst) > 0);
+        if ours {
+            let at = info.location().map(|l| format!("{}:{}", l.file(), l.line()));
+            *LAST_LOCATION.lock().unwrap_or_else(|e| e.into_inner()) = at;
+        } else {
+            previous(info);
+        }
+    })
+}
+
+/// Marks the current thread as inside a boundary call while it lives.
+struct Inside;
+
+impl Inside {
+    fn enter() -> Self {
+        install_quiet_hook();
+        INSIDE.with(|d| d.set(d.get() + 1));
+        ACTIVE.fetch_add(1, Ordering::SeqCst);
+        Inside
+    }
+}
+
+impl Drop for Inside {
+    fn drop(&mut self) {
+        ACTIVE.fetch_sub(1, Ordering::SeqCst);
+        INSIDE.with(|d| d.set(d.get().saturating_sub(1)));
+    }
+}
+
+/// Runs `f` behind `catch_unwind` with the quiet hook active for it.
+pub(crate) fn quietly<R>(f: impl FnOnce() -> R) -> std::thread::Result<R> {
+    let _inside = Inside::enter();
+    catch_unwind(AssertUnwindSafe(f))
+}
+
 fn panic_message(payload: &(dyn Any + Send)) -> String {
     let what = payload
         .downcast_ref::<&str>()
         .map(|s| s.to_string())
         .or_else(|| payload.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "unknown panic payload".to_string());
-    format!("internal error (panic) in Plumage: {what}; the system is poisoned, destroy it")
+    let at = LAST_LOCATION.lock().unwrap_or_else(|e| e.into_inner()).take();
+    let at = at.map(|l| format!(" at {l}")).unwrap_or_default();
+    format!("internal error (panic) in Plumage: {what}{at}; the system is poisoned, destroy it")
 }
 
 /// A call that needs exclusive access to a live system; the body gets the
@@ -109,13 +175,13 @@ pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System
         handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
-    let outcome = catch_unwind(AssertUnwindSafe(|| {
+    let outcome = quietly(|| {
         let progress = match &handle.progress {
             Some(p) => Progress::to(p),
             None => Progress::none(),
         };
         body(&mut handle.system, &progress)
-    }));
+    });
     settle(handle, outcome)
 }
 
@@ -131,7 +197,7 @@ pub(crate) fn with_system_ref(sys: *const PlumageSystem, body: impl FnOnce(&Syst
         handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
-    let outcome = catch_unwind(AssertUnwindSafe(|| body(&handle.system)));
+    let outcome = quietly(|| body(&handle.system));
     settle(handle, outcome)
 }
 
@@ -152,7 +218,7 @@ fn settle(handle: &PlumageSystem, outcome: std::thread::Result<CallResult>) -> u
 
 /// A call without a system (create, and calls on the library itself).
 pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
-    match catch_unwind(AssertUnwindSafe(body)) {
+    match quietly(body) {
         Ok(Ok(())) => PLUMAGE_STATUS_OK,
         Ok(Err(failure)) => {
             set_thread_error(&failure.message);
@@ -244,4 +310,58 @@ pub(crate) unsafe fn write_versioned<T: Copy>(ptr: *mut T, min_size: usize, valu
         std::ptr::write_unaligned(ptr as *mut u32, n as u32);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pool::WorkerPool;
+
+    /// Panics whose message holds this token are counted by the test hook.
+    const TOKEN: &str = "quiet-hook-test";
+    static FORWARDED: AtomicUsize = AtomicUsize::new(0);
+
+    fn counting() -> Hook {
+        Box::new(|info| {
+            let text = info.payload().downcast_ref::<&str>().copied().unwrap_or_default();
+            if text.contains(TOKEN) {
+                FORWARDED.fetch_add(1, Ordering::SeqCst);
+            }
+        })
+    }
+
+    #[test]
+    fn plumage_panics_are_silent_and_others_reach_the_previous_hook() {
+        install_quiet_hook();
+        let installed = std::panic::take_hook();
+        std::panic::set_hook(quiet_hook(counting()));
+
+        // Inside the boundary, on the calling thread and on a pool worker:
+        // nothing reaches the previous hook, the message and place are kept.
+        let status = without_system(|| panic!("quiet-hook-test: caller"));
+        let caller = thread_error().into_string().unwrap();
+        let pool = WorkerPool::new(2).unwrap();
+        let status_worker = without_system(|| {
+            pool.install(|| rayon::join(|| (), || panic!("quiet-hook-test: worker")));
+            Ok(())
+        });
+        let worker = thread_error().into_string().unwrap();
+        let silenced = FORWARDED.load(Ordering::SeqCst);
+
+        // Outside the boundary (this thread, and a worker used directly by
+        // Rust code): the previous hook sees them.
+        let _ = catch_unwind(|| panic!("quiet-hook-test: host"));
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            pool.install(|| rayon::join(|| (), || panic!("quiet-hook-test: rust worker")))
+        }));
+        let forwarded = FORWARDED.load(Ordering::SeqCst);
+        std::panic::set_hook(installed);
+
+        assert_eq!((status, status_worker), (PLUMAGE_STATUS_PANIC, PLUMAGE_STATUS_PANIC));
+        assert!(caller.contains("quiet-hook-test: caller") && caller.contains("boundary.rs:"), "{caller}");
+        assert!(worker.contains("quiet-hook-test: worker") && worker.contains("boundary.rs:"), "{worker}");
+        assert_eq!(silenced, 0, "a panic inside the boundary reached the previous hook");
+        assert_eq!(forwarded, 2, "a panic outside the boundary did not reach the previous hook");
+        assert_eq!((INSIDE.with(Cell::get), ACTIVE.load(Ordering::SeqCst)), (0, 0));
+    }
 }

@@ -206,10 +206,10 @@ pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
     if sys.is_null() {
         return;
     }
-    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let _ = boundary::quietly(|| {
         // SAFETY: from plumage_system_create, not yet destroyed (contract).
         drop(unsafe { Box::from_raw(sys) });
-    }));
+    });
 }
 
 /// Advances the animation by one frame: `positions` holds xyz for each of
@@ -665,14 +665,14 @@ pub unsafe extern "C" fn plumage_system_last_error(
     buf: *mut c_char,
     capacity: usize,
 ) -> usize {
-    let message = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+    let message = boundary::quietly(|| {
         if sys.is_null() {
             thread_error()
         } else {
             // SAFETY: live handle (contract); reading the error is allowed even when poisoned.
             unsafe { &*sys }.last_error()
         }
-    }))
+    })
     .unwrap_or_default();
     let bytes = message.as_bytes_with_nul();
     if !buf.is_null() && capacity > 0 {

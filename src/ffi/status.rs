@@ -34,6 +34,10 @@ pub const PLUMAGE_STATUS_SIZE_OVERFLOW: u32 = 14;
 pub const PLUMAGE_STATUS_INVALID_STATE: u32 = 15;
 /// The requested figure has not been computed for this system (yet).
 pub const PLUMAGE_STATUS_NOT_AVAILABLE: u32 = 16;
+/// The request is outside the documented limits (feather count, estimated
+/// root count of a spacing, coordinate magnitude); refused up front, before
+/// anything large is allocated. The message names the limit.
+pub const PLUMAGE_STATUS_LIMIT_EXCEEDED: u32 = 17;
 
 /// Every status with its name, in numeric order.
 pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
@@ -54,6 +58,7 @@ pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
     (PLUMAGE_STATUS_SIZE_OVERFLOW, c"SIZE_OVERFLOW"),
     (PLUMAGE_STATUS_INVALID_STATE, c"INVALID_STATE"),
     (PLUMAGE_STATUS_NOT_AVAILABLE, c"NOT_AVAILABLE"),
+    (PLUMAGE_STATUS_LIMIT_EXCEEDED, c"LIMIT_EXCEEDED"),
 ];
 
 /// The status a safe-API error kind maps to.
@@ -70,5 +75,6 @@ pub(crate) fn status_of(kind: crate::ErrorKind) -> u32 {
         K::SizeOverflow => PLUMAGE_STATUS_SIZE_OVERFLOW,
         K::Interrupted => PLUMAGE_STATUS_INTERRUPTED,
         K::InvalidState => PLUMAGE_STATUS_INVALID_STATE,
+        K::LimitExceeded => PLUMAGE_STATUS_LIMIT_EXCEEDED,
     }
 }

@@ -142,6 +142,17 @@ pub const PLUMAGE_PHASE_ORDERING: u32 = 2;
 /// Progress phase: the height-field adjustment of the feathers.
 pub const PLUMAGE_PHASE_ADJUSTING: u32 = 3;
 
+/// Most feathers a system may hold: a larger `target_feathers`, or a
+/// `spacing` that would plant more, is refused with
+/// PLUMAGE_STATUS_LIMIT_EXCEEDED before anything large is allocated.
+pub const PLUMAGE_MAX_FEATHERS: u32 = 2_000_000;
+/// Largest coordinate magnitude accepted in a mesh or a frame, and largest
+/// spacing, feather length, width and thickness (model units); beyond it,
+/// PLUMAGE_STATUS_LIMIT_EXCEEDED.
+pub const PLUMAGE_MAX_COORDINATE: f32 = 1e9;
+const _: () = assert!(PLUMAGE_MAX_FEATHERS as usize == crate::limits::MAX_FEATHERS);
+const _: () = assert!(PLUMAGE_MAX_COORDINATE == crate::limits::MAX_COORDINATE);
+
 /// The host's callback as a progress sink.
 #[derive(Clone, Copy)]
 pub(crate) struct HostProgress {

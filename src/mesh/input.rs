@@ -56,6 +56,7 @@ impl<'a> MeshInput<'a> {
             return Err(Error::new(ErrorKind::SizeOverflow, format!("{n} vertices exceed the 32-bit index range")));
         }
         check_finite("position", self.positions, 3)?;
+        check_magnitude(self.positions)?;
         if let Some((k, &i)) = self.indices.iter().enumerate().find(|&(_, &i)| i as usize >= n) {
             return Err(Error::new(
                 ErrorKind::IndexOutOfRange,
@@ -91,7 +92,24 @@ pub fn check_frame_positions(positions: &[f32], expected_vertices: usize) -> Res
             format!("frame has {} vertices but the rest mesh has {}", positions.len() / 3, expected_vertices),
         ));
     }
-    check_finite("position", positions, 3)
+    check_finite("position", positions, 3)?;
+    check_magnitude(positions)
+}
+
+/// Refuses coordinates beyond [`MAX_COORDINATE`](crate::limits::MAX_COORDINATE).
+fn check_magnitude(positions: &[f32]) -> Result<()> {
+    let limit = crate::limits::MAX_COORDINATE;
+    match positions.iter().position(|x| x.abs() > limit) {
+        None => Ok(()),
+        Some(k) => Err(Error::new(
+            ErrorKind::LimitExceeded,
+            format!(
+                "position of vertex {} has a coordinate of {:e}, beyond the supported magnitude {limit:e} model units; scale the model down",
+                k / 3,
+                positions[k]
+            ),
+        )),
+    }
 }
 
 fn check_len(name: &str, got: usize, want: usize) -> Result<()> {

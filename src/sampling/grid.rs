@@ -55,18 +55,43 @@ fn cell_of(p: Vec3, inv_cell: f32) -> Cell {
     Cell([c.x as i32, c.y as i32, c.z as i32])
 }
 
+/// Number of cells in the box that [`for_each_cell`] walks (as f64: it can
+/// exceed any integer type when the radius is huge against the cell, or
+/// infinite).
+fn box_cell_count(center: Vec3, radius: f32, inv_cell: f32) -> f64 {
+    let lo = ((center - Vec3::splat(radius)) * inv_cell).floor().as_dvec3();
+    let hi = ((center + Vec3::splat(radius)) * inv_cell).floor().as_dvec3();
+    let n = (hi - lo + 1.0).max(glam::DVec3::ONE);
+    let count = n.x * n.y * n.z;
+    if count.is_nan() { f64::INFINITY } else { count }
+}
+
+/// Squared distance from `c` to the cell interval `[k, k + 1) · cell` on one axis.
+fn axis_gap(c: f32, k: i32, cell: f32) -> f32 {
+    let (a, b) = (k as f32 * cell, (k + 1) as f32 * cell);
+    let g = (a - c).max(c - b).max(0.0);
+    g * g
+}
+
+/// True when [`for_each_cell`] visits `cell` (same box, same test).
+fn ball_meets_cell(center: Vec3, radius: f32, inv_cell: f32, cell: Cell) -> bool {
+    let lo = cell_of(center - Vec3::splat(radius), inv_cell).0;
+    let hi = cell_of(center + Vec3::splat(radius), inv_cell).0;
+    let size = 1.0 / inv_cell;
+    (0..3).all(|a| lo[a] <= cell.0[a] && cell.0[a] <= hi[a])
+        && axis_gap(center.x, cell.0[0], size)
+            + axis_gap(center.y, cell.0[1], size)
+            + axis_gap(center.z, cell.0[2], size)
+            <= radius * radius
+}
+
 /// Visits every cell that meets the ball of `radius` around `center`.
 fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cell)) {
     let lo = cell_of(center - Vec3::splat(radius), inv_cell);
     let hi = cell_of(center + Vec3::splat(radius), inv_cell);
     let cell = 1.0 / inv_cell;
     let r2 = radius * radius;
-    // Squared distance from `c` to the cell interval `[k, k + 1) · cell` on one axis.
-    let gap = |c: f32, k: i32| {
-        let (a, b) = (k as f32 * cell, (k + 1) as f32 * cell);
-        let g = (a - c).max(c - b).max(0.0);
-        g * g
-    };
+    let gap = |c: f32, k: i32| axis_gap(c, k, cell);
     let (lo, hi) = (lo.0, hi.0);
     for x in lo[0]..=hi[0] {
         let gx = gap(center.x, x);
@@ -141,6 +166,19 @@ impl StaticGrid {
     #[inline]
     pub(crate) fn for_each_slot_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
         let r2 = radius * radius;
+        // A radius huge against the cell (spacing multipliers far apart)
+        // would walk more cells than there are points: scan the points
+        // instead. Slots are sorted by cell in the walk's (x, y, z) order,
+        // so the calls come in the same order either way.
+        if box_cell_count(center - self.origin, radius, self.inv_cell) > self.positions.len() as f64 {
+            for (slot, p) in self.positions.iter().enumerate() {
+                let d2 = (*p - center).length_squared();
+                if d2 <= r2 {
+                    f(slot as u32, d2);
+                }
+            }
+            return;
+        }
         for_each_cell(center - self.origin, radius, self.inv_cell, |cell| {
             if let Some(&(a, b)) = self.ranges.get(&cell) {
                 for (slot, p) in (a..b).zip(&self.positions[a as usize..b as usize]) {
@@ -180,6 +218,16 @@ impl DynamicGrid {
     /// Calls `f(index)` for every inserted point in a cell overlapping the
     /// cube of half-size `radius` around `center` (the caller checks distance).
     pub(crate) fn for_each_candidate(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32)) {
+        // As in `StaticGrid::for_each_slot_within`: a box of more cells than
+        // occupied ones visits the occupied cells instead, in the walk's order.
+        if box_cell_count(center, radius, self.inv_cell) > self.cells.len() as f64 {
+            let mut cells: Vec<Cell> = self.cells.keys().copied().collect();
+            cells.sort_unstable();
+            for cell in cells.into_iter().filter(|&c| ball_meets_cell(center, radius, self.inv_cell, c)) {
+                self.cells[&cell].iter().for_each(|&i| f(i));
+            }
+            return;
+        }
         for_each_cell(center, radius, self.inv_cell, |cell| {
             if let Some(list) = self.cells.get(&cell) {
                 list.iter().for_each(|&i| f(i));
@@ -205,5 +253,55 @@ mod tests {
         found.sort_unstable();
         let expected: Vec<u32> = (0..500).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
         assert_eq!(found, expected);
+    }
+
+    /// A radius far beyond the cell size (or infinite) scans instead of
+    /// walking cells, and gives the same calls in the same order as the walk.
+    #[test]
+    fn huge_radii_scan_in_the_walk_order() {
+        let mut rng = Rng::new(9);
+        let pts: Vec<Vec3> =
+            (0..300).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0).collect();
+        let grid = StaticGrid::new(&pts, 0.5);
+        let mut dynamic = DynamicGrid::new(0.5);
+        pts.iter().enumerate().for_each(|(i, &p)| dynamic.insert(i as u32, p));
+        let c = Vec3::new(0.1, -0.2, 0.3);
+        // Both paths at a radius where the walk is still cheap.
+        let r = 1.3;
+        assert!(box_cell_count(c - grid.origin, r, grid.inv_cell) <= pts.len() as f64);
+        let mut walked = Vec::new();
+        grid.for_each_within(c, r, |i, d2| walked.push((i, d2)));
+        let mut scanned = Vec::new();
+        let r2 = r * r;
+        for (slot, p) in grid.positions.iter().enumerate() {
+            let d2 = (*p - c).length_squared();
+            if d2 <= r2 {
+                scanned.push((grid.order[slot], d2));
+            }
+        }
+        assert_eq!(walked, scanned);
+        let mut walked = Vec::new();
+        for_each_cell(c, r, dynamic.inv_cell, |cell| {
+            if let Some(list) = dynamic.cells.get(&cell) {
+                walked.extend_from_slice(list);
+            }
+        });
+        let mut cells: Vec<Cell> = dynamic.cells.keys().copied().collect();
+        cells.sort_unstable();
+        let visited: Vec<u32> = cells
+            .into_iter()
+            .filter(|&cell| ball_meets_cell(c, r, dynamic.inv_cell, cell))
+            .flat_map(|cell| dynamic.cells[&cell].clone())
+            .collect();
+        assert_eq!(walked, visited);
+        // Huge and infinite radii return at once with every point.
+        for r in [1e30, f32::INFINITY] {
+            let mut n = 0;
+            grid.for_each_within(c, r, |_, _| n += 1);
+            assert_eq!(n, pts.len());
+            let mut n = 0;
+            dynamic.for_each_candidate(c, r, |_| n += 1);
+            assert_eq!(n, pts.len());
+        }
     }
 }

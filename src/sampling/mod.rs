@@ -99,6 +99,7 @@ pub fn sample_roots_with_progress(
     let buried = BuriedSkin::new(positions, &mesh.triangles);
     let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
+    check_spacing_estimate(density.effective_area(), config)?;
     let (spacing, pool, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
         (if config.spacing > 0.0 { config.spacing } else { nominal }, None, Vec::new())
@@ -117,6 +118,32 @@ pub fn sample_roots_with_progress(
     let seconds = start.elapsed().as_secs_f64();
     let metrics = sampling_metrics(surface, positions, fields, &buried, &roots, spacing, config.theta);
     Ok(Sampling { roots, spacing, metrics, seconds })
+}
+
+/// Refuses a `config.spacing` whose estimated root count over
+/// `effective_area` exceeds [`MAX_FEATHERS`](crate::limits::MAX_FEATHERS),
+/// before any pool is drawn.
+fn check_spacing_estimate(effective_area: f64, config: &Config) -> Result<()> {
+    if config.spacing <= 0.0 || !(effective_area > 0.0) {
+        return Ok(());
+    }
+    let packing = match config.sampler {
+        SamplerKind::Guided => GUIDED_PACKING,
+        SamplerKind::Random => RANDOM_PACKING,
+    };
+    let d = f64::from(config.spacing);
+    let estimate = effective_area / (packing * d * d);
+    if estimate > crate::limits::MAX_FEATHERS as f64 {
+        return Err(Error::new(
+            ErrorKind::LimitExceeded,
+            format!(
+                "config.spacing {} would plant about {estimate:.3e} feathers on this surface, more than the supported {}",
+                config.spacing,
+                crate::limits::MAX_FEATHERS
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The feather count aimed at: `config.target_feathers`, or the default

@@ -2,5 +2,6 @@
 //! test-model loader. Each test binary uses only some of them.
 #![allow(dead_code)]
 
+pub mod fuzz;
 pub mod gltf_mesh;
 pub mod shapes;

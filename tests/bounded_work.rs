@@ -1,0 +1,260 @@
+//! Bounded work (issue 23): requests the machine cannot hold are refused up
+//! front with `TooLarge` before anything big is allocated; extreme but
+//! legal inputs (huge or tiny coordinates, slivers, near-duplicates) finish
+//! within time and memory bounded by the mesh size and the feather count.
+
+mod common;
+
+use common::shapes::{Shape, cylinder};
+use plumage::limits::{MAX_COORDINATE, MAX_FEATHERS};
+use plumage::{Config, ErrorKind, MeshInput, SamplerKind, System};
+use std::time::Instant;
+
+fn scaled(shape: &Shape, s: f32) -> Shape {
+    Shape { positions: shape.positions.iter().map(|x| x * s).collect(), indices: shape.indices.clone() }
+}
+
+/// Exploration and the README's figures: `PLUMAGE_PROBE=CASE cargo test
+/// --release --test bounded_work probe -- --ignored --nocapture`, CASE one
+/// of target1e6, target1e7, spacing1e-9, spacing1e-3, huge, big, tiny,
+/// tinier, scaleS, offsetO, feathersN.
+#[test]
+#[ignore]
+fn probe() {
+    let case = std::env::var("PLUMAGE_PROBE").unwrap_or_default();
+    let base = cylinder(1.0, 3.0, 24, 12);
+    let diag = (3.0f32 * 3.0 + 2.0 * 2.0 + 2.0 * 2.0).sqrt();
+    let (shape, cfg) = match case.as_str() {
+        "target1e7" => (base, Config { target_feathers: 10_000_000, ..Config::default() }),
+        "target1e6" => (base, Config { target_feathers: 1_000_000, ..Config::default() }),
+        "spacing1e-9" => (base, Config { spacing: 1e-9 * diag, ..Config::default() }),
+        "spacing1e-3" => (base, Config { spacing: 1e-3 * diag, ..Config::default() }),
+        "huge" => (scaled(&base, 1e30), Config { target_feathers: 2000, ..Config::default() }),
+        "big" => (scaled(&base, 1e18), Config { target_feathers: 2000, ..Config::default() }),
+        "tiny" => (scaled(&base, 1e-20), Config { target_feathers: 2000, ..Config::default() }),
+        "tinier" => (scaled(&base, 1e-35), Config { target_feathers: 2000, ..Config::default() }),
+        other if other.starts_with("feathers") => {
+            // A finer cylinder (24 576 triangles) dressed with N feathers.
+            let n: usize = other[8..].parse().unwrap();
+            (cylinder(1.0, 3.0, 128, 96), Config { target_feathers: n, threads: 1, ..Config::default() })
+        }
+        other if other.starts_with("offset") => {
+            let o: f32 = other[6..].parse().unwrap();
+            let mut b = base.clone();
+            b.positions.iter_mut().step_by(3).for_each(|x| *x += o);
+            (b, Config { target_feathers: 2000, ..Config::default() })
+        }
+        other if other.starts_with("scale") => {
+            let s: f32 = other[5..].parse().unwrap();
+            (scaled(&base, s), Config { target_feathers: 2000, ..Config::default() })
+        }
+        other => panic!("unknown case {other}"),
+    };
+    let t = Instant::now();
+    let r = System::new(&cfg, &MeshInput::new(&shape.positions, &shape.indices));
+    eprintln!(
+        "{case}: {:?} in {:.2} s, peak RSS {} KiB",
+        r.as_ref().map(|s| s.feather_count()).map_err(|e| e.to_string()),
+        t.elapsed().as_secs_f64(),
+        common::fuzz::peak_rss_kib()
+    );
+}
+
+fn create(shape: &Shape, cfg: &Config) -> Result<System, plumage::Error> {
+    System::new(cfg, &MeshInput::new(&shape.positions, &shape.indices))
+}
+
+/// A refusal, timed: it must come at once (nothing big was started).
+fn refused_at_once(shape: &Shape, cfg: &Config) -> plumage::Error {
+    let t = Instant::now();
+    let err = create(shape, cfg).expect_err("refused");
+    let s = t.elapsed().as_secs_f64();
+    assert!(s < 1.0, "refusal took {s:.2} s: {err}");
+    err
+}
+
+#[test]
+fn requests_beyond_the_limits_are_refused_up_front() {
+    let base = cylinder(1.0, 3.0, 24, 12);
+    for target in [MAX_FEATHERS + 1, 1_000_000_000] {
+        let err = refused_at_once(&base, &Config { target_feathers: target, ..Config::default() });
+        assert_eq!(err.kind(), ErrorKind::LimitExceeded, "{err}");
+        assert!(err.message().contains(&MAX_FEATHERS.to_string()), "{err}");
+    }
+    // A spacing of 1e-9 and 1e-4 of the model's diagonal (about 10^19 and
+    // 10^9 feathers), for both samplers.
+    let diag = (3.0f32 * 3.0 + 2.0 * 2.0 + 2.0 * 2.0).sqrt();
+    for sampler in [SamplerKind::Guided, SamplerKind::Random] {
+        for fraction in [1e-9, 1e-4] {
+            let cfg = Config { spacing: fraction * diag, sampler, ..Config::default() };
+            let err = refused_at_once(&base, &cfg);
+            assert_eq!(err.kind(), ErrorKind::LimitExceeded, "{err}");
+            assert!(err.message().contains("config.spacing"), "{err}");
+        }
+    }
+    // Coordinates beyond the supported magnitude, and so small that every
+    // triangle's area underflows.
+    let err = refused_at_once(&scaled(&base, 1e11), &Config::default());
+    assert_eq!(err.kind(), ErrorKind::LimitExceeded, "{err}");
+    assert!(err.message().contains("scale the model down"), "{err}");
+    let err = refused_at_once(&scaled(&base, 1e-12), &Config::default());
+    assert_eq!(err.kind(), ErrorKind::DegenerateMesh, "{err}");
+}
+
+/// Inside the limits, the same request at any scale from 1e-9 to the
+/// largest accepted gives the requested count in bounded time.
+#[test]
+fn any_accepted_scale_gives_the_requested_feathers() {
+    let base = cylinder(1.0, 3.0, 24, 12);
+    let cfg = Config { target_feathers: 1500, threads: 1, ..Config::default() };
+    for s in [1e-9, 1e-4, 1.0, 1e4, MAX_COORDINATE / 3.0] {
+        let t = Instant::now();
+        let sys = create(&scaled(&base, s), &cfg).unwrap_or_else(|e| panic!("scale {s:e}: {e}"));
+        let (n, secs) = (sys.feather_count(), t.elapsed().as_secs_f64());
+        assert!((1275..=1725).contains(&n), "scale {s:e}: {n} feathers");
+        assert!(secs < 10.0, "scale {s:e}: {secs:.1} s");
+    }
+    // The largest triangles the limit lets through (edges of 1.7e9).
+    let coarse = scaled(&cylinder(1.0, 1.0, 3, 1), MAX_COORDINATE);
+    let sys = create(&coarse, &cfg).unwrap();
+    assert!((1275..=1725).contains(&sys.feather_count()), "{} feathers", sys.feather_count());
+}
+
+/// A mesh mixing slivers, near-duplicate triangles and triangles 10^6
+/// times larger than others finishes in bounded time.
+#[test]
+fn slivers_duplicates_and_mixed_sizes_finish() {
+    let mut shape = cylinder(1.0, 3.0, 24, 12);
+    let big = scaled(&cylinder(1.0, 3.0, 6, 2), 1e5);
+    shape.append(&big);
+    let mut slivers = cylinder(1.0, 3.0, 200, 1);
+    slivers.positions.iter_mut().skip(2).step_by(3).for_each(|z| *z *= 1e-4);
+    shape.append(&slivers);
+    let twin = Shape { positions: shape.positions.iter().map(|x| x + 1e-6).collect(), indices: shape.indices.clone() };
+    shape.append(&twin);
+    let t = Instant::now();
+    let sys = create(&shape, &Config { target_feathers: 3000, threads: 1, ..Config::default() }).unwrap();
+    let secs = t.elapsed().as_secs_f64();
+    assert!(sys.feather_count() > 1000, "{} feathers", sys.feather_count());
+    assert!(secs < 10.0, "{secs:.1} s");
+}
+
+/// A frame that cannot be used (NaN, a coordinate beyond the limit) is
+/// refused mid-clip and the previous frame stays: same feathers, same saved
+/// state; the next usable frame continues as if the refusal never happened.
+/// A collapsed region (a ring of vertices at one point) is usable: it
+/// steps, with finite feathers.
+#[test]
+fn unusable_frames_leave_the_previous_frame_in_place() {
+    let shape = cylinder(1.0, 3.0, 24, 12);
+    let cfg = Config { target_feathers: 400, threads: 1, ..Config::default() };
+    let wave = |k: usize| -> Vec<f32> {
+        shape.positions.chunks(3).flat_map(|p| [p[0] + 0.1 * (p[2] + 0.3 * k as f32).sin(), p[1], p[2]]).collect()
+    };
+    let mut sys = create(&shape, &cfg).unwrap();
+    let mut twin = create(&shape, &cfg).unwrap();
+    for k in 1..=3 {
+        sys.step(&wave(k)).unwrap();
+        twin.step(&wave(k)).unwrap();
+    }
+    let before = sys.save_state();
+    let feathers = sys.feather_triangles().to_vec();
+    let mut nan = wave(4);
+    nan[40] = f32::NAN;
+    let mut huge = wave(4);
+    huge[41] = 1e12;
+    assert_eq!(sys.step(&nan).unwrap_err().kind(), ErrorKind::NonFinite);
+    assert_eq!(sys.step(&huge).unwrap_err().kind(), ErrorKind::LimitExceeded);
+    assert_eq!(sys.evaluate(&huge).unwrap_err().kind(), ErrorKind::LimitExceeded);
+    assert_eq!(sys.save_state(), before, "a refused frame changed the state");
+    assert_eq!(sys.feather_triangles(), &feathers[..]);
+    sys.step(&wave(4)).unwrap();
+    twin.step(&wave(4)).unwrap();
+    assert_eq!(sys.save_state(), twin.save_state());
+
+    // A ring collapsed to a point mid-clip.
+    let mut collapsed = wave(5);
+    let ring = 24 * 6..24 * 7;
+    for v in ring {
+        collapsed[3 * v..3 * v + 3].copy_from_slice(&[0.0, 0.0, 1.5]);
+    }
+    sys.step(&collapsed).unwrap();
+    assert!(sys.feather_triangles().iter().flatten().all(|x| x.is_finite()));
+    sys.step(&wave(6)).unwrap();
+    assert!(sys.feather_triangles().iter().flatten().all(|x| x.is_finite()));
+}
+
+/// Found by `fuzz_create`: per-vertex spacing multipliers far apart (one
+/// vertex at 1e-20 or 1e20 of the rest) made the sampling's coverage probes
+/// walk ~10^18 grid cells per query (the run never ended), then the pool's
+/// rejection draw run for 75 s. Grid queries now scan the points when the
+/// walk would be longer, and multipliers are clamped to within
+/// `MAX_MULTIPLIER_RATIO` of their median.
+#[test]
+fn spacing_multipliers_far_apart_finish() {
+    let shape = cylinder(1.0, 3.0, 24, 12);
+    for extreme in [1e-20f32, 1e-6, 1e-2, 1e2, 1e6, 1e20] {
+        let mut scale = vec![1.0f32; shape.vertex_count()];
+        scale[17] = extreme;
+        let mesh = MeshInput { spacing_scale: Some(&scale), ..MeshInput::new(&shape.positions, &shape.indices) };
+        let t = Instant::now();
+        let result = System::new(&Config { target_feathers: 300, threads: 1, ..Config::default() }, &mesh);
+        let secs = t.elapsed().as_secs_f64();
+        let sys = result.unwrap_or_else(|e| panic!("multiplier {extreme:e}: {e}"));
+        assert!(sys.feather_count() > 0, "multiplier {extreme:e}");
+        eprintln!("multiplier {extreme:e}: {} feathers in {secs:.2} s", sys.feather_count());
+        assert!(secs < 10.0, "multiplier {extreme:e}: {secs:.1} s");
+    }
+}
+
+/// Found by `fuzz_create`: a spacing of f32::MAX planted one feather whose
+/// triangles were NaN. Lengths beyond `MAX_COORDINATE` are refused; at the
+/// limit the feathers are finite.
+#[test]
+fn lengths_beyond_the_limit_are_refused_and_at_it_are_finite() {
+    let shape = cylinder(1.0, 3.0, 24, 12);
+    type Set = fn(&mut Config, f32);
+    let fields: [(&str, Set); 4] = [
+        ("spacing", |c, x| c.spacing = x),
+        ("feather_length", |c, x| c.feather_length = x),
+        ("feather_width", |c, x| c.feather_width = x),
+        ("feather_thickness", |c, x| c.feather_thickness = x),
+    ];
+    for (name, set) in fields {
+        for x in [f32::MAX, 1e30, 2.0 * MAX_COORDINATE] {
+            let mut cfg = Config { target_feathers: 200, threads: 1, ..Config::default() };
+            set(&mut cfg, x);
+            let err = refused_at_once(&shape, &cfg);
+            assert_eq!(err.kind(), ErrorKind::LimitExceeded, "{name} = {x:e}: {err}");
+            assert!(err.message().contains(name), "{err}");
+        }
+        let mut cfg = Config { target_feathers: 200, threads: 1, ..Config::default() };
+        set(&mut cfg, MAX_COORDINATE);
+        let sys = create(&shape, &cfg).unwrap_or_else(|e| panic!("{name} at the limit: {e}"));
+        let bad = sys.feather_triangles().iter().flatten().filter(|x| !x.is_finite()).count();
+        assert_eq!(bad, 0, "{name} at the limit: {bad} non-finite coordinates");
+    }
+}
+
+/// Found by `fuzz_create` (case 3000): a length map with a huge value on a
+/// thin box gave NaN feather triangles. Length and width multipliers are
+/// clamped like the spacing ones.
+#[test]
+fn huge_length_and_width_multipliers_give_finite_feathers() {
+    let shape = common::shapes::thin_box(2.5, 2.3, 7e-5, 5, 2);
+    for extreme in [f32::MAX, 1e30, 1e-30] {
+        let mut scale = vec![1.0f32; shape.vertex_count()];
+        scale[3] = extreme;
+        for width in [false, true] {
+            let base = MeshInput::new(&shape.positions, &shape.indices);
+            let mesh = if width {
+                MeshInput { width_scale: Some(&scale), ..base }
+            } else {
+                MeshInput { length_scale: Some(&scale), ..base }
+            };
+            let sys = System::new(&Config { target_feathers: 80, threads: 1, ..Config::default() }, &mesh).unwrap();
+            let bad = sys.feather_triangles().iter().flatten().filter(|x| !x.is_finite()).count();
+            assert_eq!(bad, 0, "multiplier {extreme:e} (width {width}): {bad} non-finite coordinates");
+        }
+    }
+}
