@@ -121,3 +121,22 @@ def test_defaults_round_trip_through_the_keywords(sphere) -> None:
 def test_modes_step_collision_free(sphere, mode: str) -> None:
     with run(sphere, 2, frames=2, mode=mode) as s:
         assert s.validate().intersecting_pairs == 0
+
+
+def test_scales_preset_and_bent_feathers(sphere) -> None:
+    v, t = sphere
+    with plumage.System(v, t, target_feathers=300, threads=1) as feathers, plumage.System(
+        v, t, target_feathers=300, threads=1, preset="scales"
+    ) as scales, plumage.System(v, t, target_feathers=300, threads=1, shaft_segments=4) as bent:
+        longest = [float(s.feathers()["length"].max()) / s.sampling_stats().spacing for s in (feathers, scales)]
+        assert abs(longest[0] - 4.0) < 0.5 and abs(longest[1] - 2.0) < 0.3, longest
+        for s in (scales, bent):
+            v_ = s.validate()
+            assert v_.intersecting_pairs == 0 and v_.body_penetrations == 0
+        g = bent.feather_geometry()
+        # A four-segment shaft: more than the kite's four vertices a feather, triangles to match.
+        assert g.positions.shape[0] > 4 * bent.feather_count
+        assert bent.feather_triangles().shape == (bent.feather_count, 3 * (g.triangles.shape[0] // bent.feather_count), 3)
+    with pytest.raises(plumage.PlumageError) as e:
+        plumage.System(v, t, preset="fur")
+    assert e.value.status_name == "INVALID_ARGUMENT"

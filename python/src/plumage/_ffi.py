@@ -23,6 +23,7 @@ STATUS_INDEX_OUT_OF_RANGE = 11
 STATUS_NOT_AVAILABLE = 16
 
 SAMPLERS = {"guided": 0, "random": 1}
+PRESETS = {"feathers": 0, "scales": 1}
 MODES = {"incremental": 0, "legacy": 1, "rebuild": 2}
 PHASES = {0: "preparing", 1: "sampling", 2: "ordering", 3: "adjusting"}
 
@@ -62,6 +63,8 @@ class Config(ctypes.Structure):
         ("curvature_min_scale", c_float),
         ("shaft_segments", c_uint32),
         ("bend_limit", c_float),
+        ("length_per_spacing", c_float),
+        ("width_per_spacing", c_float),
     ]
 
 
@@ -204,6 +207,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_abi_version": (c_uint32, []),
         "plumage_status_name": (c_char_p, [c_uint32]),
         "plumage_config_init": (None, [POINTER(Config)]),
+        "plumage_config_init_preset": (c_uint32, [POINTER(Config), c_uint32]),
         "plumage_mesh_desc_init": (None, [POINTER(MeshDesc)]),
         "plumage_system_create": (c_uint32, [POINTER(Config), POINTER(MeshDesc), POINTER(c_void_p)]),
         "plumage_system_destroy": (None, [sys_p]),

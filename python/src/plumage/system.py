@@ -217,9 +217,13 @@ def default_config() -> Dict[str, Any]:
     return out
 
 
-def _build_config(config: Dict[str, Any]) -> _ffi.Config:
+def _build_config(config: Dict[str, Any], preset: str = "feathers") -> _ffi.Config:
     cfg = _ffi.Config()
-    lib.plumage_config_init(ctypes.byref(cfg))
+    if preset not in _ffi.PRESETS:
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"preset {preset!r}: expected one of {', '.join(_ffi.PRESETS)}")
+    status = lib.plumage_config_init_preset(ctypes.byref(cfg), _ffi.PRESETS[preset])
+    if status != _ffi.STATUS_OK:
+        raise PlumageError(status, f"preset {preset!r} refused", "plumage_config_init_preset")
     for key, value in config.items():
         if key not in CONFIG_FIELDS:
             raise TypeError(f"unknown configuration field {key!r}; known: {', '.join(CONFIG_FIELDS)}")
@@ -264,7 +268,8 @@ class System:
     multipliers. Keyword configuration: any `PlumageConfig` field
     (`target_feathers=`, `seed=`, `threads=`, `mode="incremental"|"legacy"|"rebuild"`,
     `sampler="guided"|"random"`, `flow_axis=(x, y, z)`, `flow_source=(x, y, z)`, ...),
-    see `default_config()`. `progress(phase, fraction)` is called while the
+    see `default_config()`; `preset="scales"` starts from the library's fish-scale
+    defaults instead of the feathers' (the keywords then override them). `progress(phase, fraction)` is called while the
     library works; a truthy return stops the call (PlumageError INTERRUPTED).
     """
 
@@ -278,10 +283,11 @@ class System:
         length_scale: Optional[ArrayLike] = None,
         width_scale: Optional[ArrayLike] = None,
         progress: Optional[ProgressCallback] = None,
+        preset: str = "feathers",
         **config: Any,
     ) -> None:
         self._handle: Optional[int] = None
-        cfg = _build_config(config)
+        cfg = _build_config(config, preset)
         pos = _float_array(vertices, "vertices", 3)
         tri = _index_array(triangles, "triangles")
         n = pos.shape[0]
