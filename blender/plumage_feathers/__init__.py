@@ -78,7 +78,9 @@ def vertex_map(mesh: bpy.types.Mesh, spec: str, components: int) -> Optional[np.
 
 
 def system_config(props: "PlumageSettings") -> Dict[str, Any]:
-    cfg: Dict[str, Any] = {"seed": props.seed, "threads": props.threads, "mode": props.mode.lower()}
+    cfg: Dict[str, Any] = {"seed": props.seed, "threads": props.threads, "mode": props.mode.lower(), "preset": props.preset.lower()}
+    if props.shaft_segments > 0:
+        cfg["shaft_segments"] = props.shaft_segments
     if props.density == "COUNT":
         cfg["target_feathers"] = props.target_feathers
     else:
@@ -139,6 +141,13 @@ class PlumageSettings(bpy.types.PropertyGroup):
     length_map: StringProperty(name="Length map")
     width_map: StringProperty(name="Width map")
     mode: EnumProperty(name="Mode", items=[("INCREMENTAL", "Incremental", ""), ("LEGACY", "Legacy", ""), ("REBUILD", "Rebuild", "")])
+    preset: EnumProperty(
+        name="Preset",
+        items=[("FEATHERS", "Feathers", "Contour feathers, long and narrow"), ("SCALES", "Scales", "Fish scales, short, wide and nearly rigid")],
+    )
+    shaft_segments: IntProperty(
+        name="Segments", default=0, min=0, max=4, description="Shaft segments (0 = the preset's): more lets a feather bend over what lies beneath it"
+    )
     seed: IntProperty(name="Seed", default=1, min=0)
     threads: IntProperty(name="Threads", default=0, min=0, max=256, description="0 = all cores")
     cache_path: StringProperty(name="Cache", subtype="FILE_PATH", default="//plumage_cache.npz")
@@ -267,6 +276,8 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
             layout.label(text=IMPORT_ERROR)
             return
         props = context.object.plumage
+        layout.prop(props, "preset", expand=True)
+        layout.prop(props, "shaft_segments")
         layout.prop(props, "density", expand=True)
         layout.prop(props, "target_feathers" if props.density == "COUNT" else "spacing")
         row = layout.row()

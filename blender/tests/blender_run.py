@@ -113,4 +113,19 @@ scene.render.resolution_percentage = 100
 scene.render.filepath = out_dir + "/frame.png"
 bpy.ops.render.render(write_still=True)
 result["rendered"] = out_dir + "/frame.png"
+# the Scales preset with bent shafts from the panel: the body dressed again
+props.preset = "SCALES"
+props.shaft_segments = 3
+props.use_cache = False
+scene.frame_set(1)
+assert bpy.ops.plumage.dress() == {"FINISHED"}
+scaly = plumage_feathers._RUNS["Body"]["system"]
+v = scaly.validate()
+geo = scaly.feather_geometry()
+result["scales"] = {
+    "feathers": scaly.feather_count,
+    "intersecting_pairs": v.intersecting_pairs,
+    "body_penetrations": v.body_penetrations,
+    "vertices_per_feather": len(geo.positions) // max(scaly.feather_count, 1),
+}
 print("PLUMAGE_RESULT " + json.dumps(result))

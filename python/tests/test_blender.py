@@ -53,6 +53,9 @@ def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
     assert result["cache_frames"] == [1, 2, 3, 4, 5, 6]
     assert result["cache_shape"][0] == 6 and result["cache_shape"][2] == 3
     assert result["cache_playback_matches"] and result["cache_playback_untouched"]
+    scales = result["scales"]  # preset and segments set from the panel
+    assert scales["feathers"] > result["feathers"] // 2 and scales["intersecting_pairs"] == 0 and scales["body_penetrations"] == 0, scales
+    assert scales["vertices_per_feather"] > 4, scales  # three segments: more than the kite's four vertices
     png = Path(result["rendered"])
     assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     keep = os.environ.get("PLUMAGE_BLENDER_RENDER")
