@@ -226,14 +226,7 @@ fn segment_check(
 ) -> bool {
     let all = feather_triangles(frame, shape, pose);
     let mine = FeatherBoxes::new(&segment_triangles(&all, shape, segment));
-    if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
-        return false;
-    }
-    let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
-    if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
-        return false;
-    }
-    !meets_obstacle(&mine, obstacles, true, &mut hints.top)
+    boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, true, hints)
 }
 
 /// The triangles of segment `segment` of a segmented feather, from its
@@ -602,14 +595,33 @@ fn exact_check(
     hints: &mut CheckHints,
 ) -> bool {
     let mine = FeatherBoxes::of_feather(frame, shape, pose);
-    if meets_obstacle(&mine, obstacles, false, &mut hints.obstacle) {
+    boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, tops, hints)
+}
+
+/// The exact tests of [`exact_check`] on triangles (`mine`, the whole
+/// feather at `pose` or a part of it): no obstacle met, no crossing of the
+/// body beyond the root socket, and with `tops` no obstacle's raised top
+/// met.
+#[allow(clippy::too_many_arguments)]
+fn boxes_clear(
+    mine: &FeatherBoxes,
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    tops: bool,
+    hints: &mut CheckHints,
+) -> bool {
+    if meets_obstacle(mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }
     let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
     if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
         return false;
     }
-    !(tops && meets_obstacle(&mine, obstacles, true, &mut hints.top))
+    !(tops && meets_obstacle(mine, obstacles, true, &mut hints.top))
 }
 
 /// An obstacle's top: its two triangles raised by its thickness along
