@@ -289,7 +289,7 @@ fn principal_flow_axis(mesh: &WeldedMesh) -> Vec3 {
         total += area(c);
         mean += area(c) * (c[0] + c[1] + c[2]) / 3.0;
     }
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return Vec3::X;
     }
     mean /= total;

@@ -124,7 +124,7 @@ pub fn sample_roots_with_progress(
 /// `effective_area` exceeds [`MAX_FEATHERS`](crate::limits::MAX_FEATHERS),
 /// before any pool is drawn.
 fn check_spacing_estimate(effective_area: f64, config: &Config) -> Result<()> {
-    if config.spacing <= 0.0 || !(effective_area > 0.0) {
+    if config.spacing <= 0.0 || effective_area.is_nan() || effective_area <= 0.0 {
         return Ok(());
     }
     let packing = match config.sampler {

@@ -36,7 +36,7 @@ pub fn tip_heights(frames: &[RootFrame], shapes: &[FeatherShape], poses: &[Feath
         .zip(poses)
         .map_init(Vec::new, |scratch, ((frame, shape), pose)| {
             let length = shape.length * pose.scale;
-            if !(length > 0.0) {
+            if length.is_nan() || length <= 0.0 {
                 return None;
             }
             let tip = tip_position(frame, shape, *pose);
