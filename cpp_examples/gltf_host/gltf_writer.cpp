@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -66,6 +67,33 @@ public:
         return static_cast<int>(model_.materials.size() - 1);
     }
 
+    // An RGBA8 image the writer encodes as an embedded PNG, drawn with a
+    // linear, clamped sampler; returns the texture's index.
+    int texture(const char* name, std::vector<unsigned char> rgba, int width, int height) {
+        tinygltf::Image image;
+        image.name = name;
+        image.width = width;
+        image.height = height;
+        image.component = 4;
+        image.bits = 8;
+        image.pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
+        image.mimeType = "image/png";
+        image.image = std::move(rgba);
+        model_.images.push_back(std::move(image));
+        tinygltf::Sampler sampler;
+        sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+        sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+        sampler.wrapS = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+        sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+        model_.samplers.push_back(sampler);
+        tinygltf::Texture t;
+        t.name = name;
+        t.source = static_cast<int>(model_.images.size() - 1);
+        t.sampler = static_cast<int>(model_.samplers.size() - 1);
+        model_.textures.push_back(std::move(t));
+        return static_cast<int>(model_.textures.size() - 1);
+    }
+
     tinygltf::Model& model() { return model_; }
 
 private:
@@ -97,6 +125,49 @@ private:
 
     tinygltf::Model model_;
 };
+
+// The feathers' vane texture over the card's UVs: x is u (root 0 to tip 1
+// along the shaft), y is v (0 to 1 across the vanes, the shaft at 0.5). The
+// vane is |v - 0.5| < 0.5 sin(pi u)^0.6, a rounded outline over the kite
+// card, opaque inside, transparent outside (a one-pixel ramp at the edge);
+// near-white so the material's colour shows, with soft slanted barbs and a
+// darker shaft that runs from the root to near the tip.
+std::vector<unsigned char> vane_texture(int width, int height) {
+    std::vector<unsigned char> rgba(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
+    const double pi = std::acos(-1.0);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const double u = (x + 0.5) / width, v = (y + 0.5) / height;
+            const double across = std::fabs(v - 0.5);
+            const double half = 0.5 * std::pow(std::sin(pi * u), 0.6);
+            const bool shaft = across < 1.5 / height && u < 0.97;
+            double alpha = std::clamp((half - across) * height + 0.5, 0.0, 1.0);
+            // Barbs slant from the shaft towards the tip.
+            const double barb = 0.5 + 0.5 * std::cos(2 * pi * (24 * u - 6 * across));
+            double shade = (0.82 + 0.18 * barb) * (1.0 - 0.25 * across / std::max(half, 1e-6) * (across < half));
+            if (shaft) alpha = 1.0, shade = 0.45;
+            unsigned char* p = &rgba[(static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4];
+            const auto byte = [](double c) { return static_cast<unsigned char>(std::lround(std::clamp(c, 0.0, 1.0) * 255)); };
+            p[0] = p[1] = p[2] = byte(shade);
+            p[3] = byte(alpha);
+        }
+    }
+    return rgba;
+}
+
+// The default feather material: double-sided, alpha-masked by the vane
+// texture, whose near-white colour a brown factor tints.
+int feather_material(GlbBuilder& b) {
+    constexpr int kWidth = 128, kHeight = 64;
+    const int texture = b.texture("feather_vane", vane_texture(kWidth, kHeight), kWidth, kHeight);
+    const int index = b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true);
+    tinygltf::Material& m = b.model().materials[static_cast<size_t>(index)];
+    m.pbrMetallicRoughness.baseColorTexture.index = texture;
+    m.pbrMetallicRoughness.baseColorTexture.texCoord = 0;
+    m.alphaMode = "MASK";
+    m.alphaCutoff = 0.5;
+    return index;
+}
 
 // The vertex attributes of one animated mesh: the rest pose and, per
 // frame, the positions (and normals, when given) its morph targets reach.
@@ -220,7 +291,7 @@ void AnimationRecorder::write_glb(const std::string& path) const {
         ids.reserve(feather_rest_.positions.size() / 3);
         for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) ids.insert(ids.end(), feather_rest_.vertex_counts[f], static_cast<float>(f));
         const AnimatedAttributes feathers{feather_rest_.positions, feather_frames_, &feather_rest_.normals, &normal_frames_, &feather_rest_.uvs, &ids};
-        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true)));
+        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, feather_material(b)));
     }
     if (!times_.empty()) add_frame_switch(b, times_, nodes);
     tinygltf::Scene scene;

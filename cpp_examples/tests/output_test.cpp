@@ -9,6 +9,7 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -183,6 +184,41 @@ void glb_feather_attributes() {
     CHECK(near(moved, kites(3, 1).normals));
 }
 
+void glb_feather_material() {
+    // The feathers' material: double-sided, alpha-masked by a vane texture
+    // the writer draws; read back, the image decodes to its size, clear
+    // outside the vane (a corner) and opaque on the shaft mid-card.
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({10, 11}), kites(2, 0));
+    rec.write_glb(path("material.glb"));
+    const tinygltf::Model m = read_back(path("material.glb"));
+    const int index = m.meshes[1].primitives[0].material;
+    CHECK(index >= 0 && static_cast<size_t>(index) < m.materials.size());
+    if (index < 0 || static_cast<size_t>(index) >= m.materials.size()) return;
+    const tinygltf::Material& mat = m.materials[static_cast<size_t>(index)];
+    CHECK(mat.doubleSided && mat.alphaMode == "MASK" && mat.alphaCutoff > 0.3 && mat.alphaCutoff < 0.7);
+    CHECK(m.meshes[0].primitives[0].material != index);  // the body's is another
+    const int tex = mat.pbrMetallicRoughness.baseColorTexture.index;
+    CHECK(tex >= 0 && static_cast<size_t>(tex) < m.textures.size() && mat.pbrMetallicRoughness.baseColorTexture.texCoord == 0);
+    if (tex < 0 || static_cast<size_t>(tex) >= m.textures.size()) return;
+    const int source = m.textures[static_cast<size_t>(tex)].source;
+    CHECK(source >= 0 && static_cast<size_t>(source) < m.images.size());
+    if (source < 0 || static_cast<size_t>(source) >= m.images.size()) return;
+    const tinygltf::Image& img = m.images[static_cast<size_t>(source)];
+    CHECK(img.width == 128 && img.height == 64 && img.component == 4 && img.bits == 8);
+    CHECK(img.image.size() == 128u * 64u * 4u);
+    if (img.image.size() != 128u * 64u * 4u) return;
+    const auto alpha = [&](double u, double v) {
+        const int x = std::min(127, static_cast<int>(u * 128)), y = std::min(63, static_cast<int>(v * 64));
+        return img.image[(static_cast<size_t>(y) * 128 + static_cast<size_t>(x)) * 4 + 3];
+    };
+    CHECK(alpha(0, 0) == 0 && alpha(1, 1) == 0 && alpha(0, 1) == 0 && alpha(1, 0) == 0);  // corners: outside the vane
+    CHECK(alpha(0.5, 0.5) == 255 && alpha(0.5, 0.3) == 255);                          // mid-card: the shaft and a vane
+    const size_t mid = (32u * 128u + 64u) * 4u, vane = (20u * 128u + 64u) * 4u;
+    CHECK(img.image[mid] < img.image[vane]);  // the shaft is darker than the vane
+    const std::vector<double> brown{0.45, 0.32, 0.2, 1.0};
+    CHECK(mat.pbrMetallicRoughness.baseColorFactor == brown);
+}
+
 void glb_feathers_matched_by_id() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
     // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
@@ -307,6 +343,7 @@ void report_memory() {
 const std::map<std::string, std::function<void()>> kCases = {
     {"glb_layout_and_frames", glb_layout_and_frames},
     {"glb_feather_attributes", glb_feather_attributes},
+    {"glb_feather_material", glb_feather_material},
     {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
     {"glb_rest_only", glb_rest_only},
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
