@@ -126,6 +126,19 @@ private:
     tinygltf::Model model_;
 };
 
+bool in_unit(double x) { return std::isfinite(x) && x >= 0 && x <= 1; }
+
+int body_material(GlbBuilder& b, const BodyMaterial& in) {
+    const int index = b.material(in.name.c_str(), in.base_color, in.double_sided);
+    tinygltf::Material& m = b.model().materials[static_cast<size_t>(index)];
+    m.pbrMetallicRoughness.metallicFactor = in.metallic;
+    m.pbrMetallicRoughness.roughnessFactor = in.roughness;
+    if (in.emissive != std::array<double, 3>{0, 0, 0}) m.emissiveFactor.assign(in.emissive.begin(), in.emissive.end());
+    m.alphaMode = in.alpha_mode;
+    m.alphaCutoff = in.alpha_cutoff;
+    return index;
+}
+
 // The feathers' vane texture over the card's UVs: x is u (root 0 to tip 1
 // along the shaft), y is v (0 to 1 across the vanes, the shaft at 0.5). The
 // vane is |v - 0.5| < 0.5 sin(pi u)^0.6, a rounded outline over the kite
@@ -241,6 +254,38 @@ void add_frame_switch(GlbBuilder& b, const std::vector<double>& times, const std
 
 }  // namespace
 
+std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index) {
+    if (mesh_index < 0 || static_cast<size_t>(mesh_index) >= model.meshes.size()) return std::nullopt;
+    for (const tinygltf::Primitive& p : model.meshes[static_cast<size_t>(mesh_index)].primitives) {
+        const bool triangles = p.mode == -1 || p.mode == TINYGLTF_MODE_TRIANGLES || p.mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+                               p.mode == TINYGLTF_MODE_TRIANGLE_FAN;
+        if (!triangles || p.material < 0) continue;
+        if (static_cast<size_t>(p.material) >= model.materials.size()) return std::nullopt;
+        const tinygltf::Material& m = model.materials[static_cast<size_t>(p.material)];
+        const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+        BodyMaterial out;
+        if (!m.name.empty()) out.name = m.name;
+        if (pbr.baseColorFactor.size() != 4 || !std::all_of(pbr.baseColorFactor.begin(), pbr.baseColorFactor.end(), in_unit)) return std::nullopt;
+        // A base colour texture is not carried over: its factor alone (white
+        // by default) would not be the body's colour, so the host's stays.
+        if (pbr.baseColorTexture.index < 0) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
+        if (!in_unit(pbr.metallicFactor) || !in_unit(pbr.roughnessFactor)) return std::nullopt;
+        out.metallic = pbr.metallicFactor;
+        out.roughness = pbr.roughnessFactor;
+        if (!m.emissiveFactor.empty()) {
+            if (m.emissiveFactor.size() != 3 || !std::all_of(m.emissiveFactor.begin(), m.emissiveFactor.end(), in_unit)) return std::nullopt;
+            std::copy_n(m.emissiveFactor.begin(), 3, out.emissive.begin());
+        }
+        out.double_sided = m.doubleSided;
+        if (m.alphaMode != "OPAQUE" && m.alphaMode != "MASK" && m.alphaMode != "BLEND") return std::nullopt;
+        if (!std::isfinite(m.alphaCutoff) || m.alphaCutoff < 0) return std::nullopt;
+        out.alpha_mode = m.alphaMode;
+        out.alpha_cutoff = m.alphaCutoff;
+        return out;
+    }
+    return std::nullopt;
+}
+
 AnimationRecorder::AnimationRecorder(std::vector<float> body_rest, std::vector<uint32_t> body_indices, const std::vector<PlumageFeather>& feathers,
                                      FeatherMeshData feather_mesh)
     : body_rest_(std::move(body_rest)), body_indices_(std::move(body_indices)), feather_rest_(std::move(feather_mesh)) {
@@ -285,7 +330,7 @@ void AnimationRecorder::add_frame(double seconds, const std::vector<float>& body
 void AnimationRecorder::write_glb(const std::string& path) const {
     GlbBuilder b;
     std::vector<int> nodes{add_animated_mesh(b, "body", AnimatedAttributes{body_rest_, body_frames_}, body_indices_,
-                                             b.material("body", {0.78, 0.72, 0.66, 1.0}, false))};
+                                             body_material(b, body_material_))};
     if (!feather_rest_.positions.empty()) {
         std::vector<float> ids;
         ids.reserve(feather_rest_.positions.size() / 3);

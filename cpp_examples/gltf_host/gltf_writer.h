@@ -6,12 +6,38 @@
 #include "plumage.h"
 #include "plumage_system.h"
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+namespace tinygltf {
+class Model;
+}
+
 namespace plumage_host {
+
+// The body's material in the .glb: the host's plain default, or the factors
+// of the input's (textures are not carried over).
+struct BodyMaterial {
+    std::string name = "body";
+    std::array<double, 4> base_color{0.78, 0.72, 0.66, 1.0};
+    double metallic = 0.0;
+    double roughness = 0.8;
+    std::array<double, 3> emissive{0, 0, 0};
+    bool double_sided = false;
+    std::string alpha_mode = "OPAQUE";  // OPAQUE, MASK or BLEND
+    double alpha_cutoff = 0.5;
+};
+
+// The material of mesh `mesh_index`'s first triangle primitive that has one,
+// by its factors (name, base colour, metallic, roughness, emissive,
+// double-sided, alpha mode and cutoff; a textured base colour keeps the
+// host's grey); nothing when no primitive has one or its factors are out of
+// glTF's ranges.
+std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index);
 
 class AnimationRecorder {
 public:
@@ -21,6 +47,9 @@ public:
 
     // One stepped frame at `seconds` (clip time).
     void add_frame(double seconds, const std::vector<float>& body, const std::vector<PlumageFeather>& feathers, const FeatherMeshData& feather_mesh);
+
+    // The body's material (the host's default unless set).
+    void set_body_material(BodyMaterial m) { body_material_ = std::move(m); }
 
     // Feathers of a frame that were not at rest (by id); they are left out.
     size_t untracked_feathers() const { return untracked_; }
@@ -45,6 +74,7 @@ private:
     std::vector<std::vector<float>> feather_frames_;
     std::vector<std::vector<float>> normal_frames_;
     size_t untracked_ = 0;
+    BodyMaterial body_material_;
 };
 
 }  // namespace plumage_host

@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 
 using namespace plumage_host;
@@ -219,6 +220,58 @@ void glb_feather_material() {
     CHECK(mat.pbrMetallicRoughness.baseColorFactor == brown);
 }
 
+void glb_body_material() {
+    // Without an input material the body is the host's grey; with one, its factors and name.
+    AnimationRecorder plain(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    plain.write_glb(path("plain.glb"));
+    const tinygltf::Model a = read_back(path("plain.glb"));
+    const tinygltf::Material& grey = a.materials[static_cast<size_t>(a.meshes[0].primitives[0].material)];
+    CHECK(grey.name == "body" && (grey.pbrMetallicRoughness.baseColorFactor == std::vector<double>{0.78, 0.72, 0.66, 1.0}));
+
+    tinygltf::Model in;
+    in.meshes.resize(1);
+    tinygltf::Primitive points, tris;
+    points.mode = TINYGLTF_MODE_POINTS;
+    points.material = 0;  // not a triangle primitive: passed over
+    tris.material = 1;
+    in.meshes[0].primitives = {points, tris};
+    in.materials.resize(2);
+    tinygltf::Material& skin = in.materials[1];
+    skin.name = "skin";
+    skin.pbrMetallicRoughness.baseColorFactor = {0.9, 0.4, 0.5, 1.0};
+    skin.pbrMetallicRoughness.metallicFactor = 0.25;
+    skin.pbrMetallicRoughness.roughnessFactor = 0.6;
+    skin.emissiveFactor = {0.1, 0, 0};
+    skin.doubleSided = true;
+    const std::optional<BodyMaterial> got = input_material(in, 0);
+    CHECK(got.has_value());
+    if (!got) return;
+    CHECK(got->name == "skin" && got->metallic == 0.25 && got->roughness == 0.6 && got->double_sided && got->alpha_mode == "OPAQUE");
+    CHECK((got->base_color == std::array<double, 4>{0.9, 0.4, 0.5, 1.0}) && (got->emissive == std::array<double, 3>{0.1, 0, 0}));
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    rec.set_body_material(*got);
+    rec.write_glb(path("skin.glb"));
+    const tinygltf::Model b = read_back(path("skin.glb"));
+    const tinygltf::Material& out = b.materials[static_cast<size_t>(b.meshes[0].primitives[0].material)];
+    CHECK(out.name == "skin" && out.doubleSided && out.pbrMetallicRoughness.baseColorFactor == skin.pbrMetallicRoughness.baseColorFactor);
+    CHECK(out.pbrMetallicRoughness.metallicFactor == 0.25 && out.pbrMetallicRoughness.roughnessFactor == 0.6 && out.emissiveFactor == skin.emissiveFactor);
+
+    // A textured base colour (not carried over) keeps the host's grey, and the other factors.
+    skin.pbrMetallicRoughness.baseColorTexture.index = 0;
+    const std::optional<BodyMaterial> textured = input_material(in, 0);
+    CHECK(textured && (textured->base_color == BodyMaterial{}.base_color) && textured->roughness == 0.6);
+    skin.pbrMetallicRoughness.baseColorTexture.index = -1;
+
+    // No material, a dangling index, factors out of range, no such mesh: nothing.
+    in.meshes[0].primitives[1].material = -1;
+    CHECK(!input_material(in, 0).has_value());
+    in.meshes[0].primitives[1].material = 7;
+    CHECK(!input_material(in, 0).has_value());
+    in.meshes[0].primitives[1].material = 1;
+    skin.pbrMetallicRoughness.baseColorFactor = {2, 0, 0, 1};
+    CHECK(!input_material(in, 0).has_value() && !input_material(in, 1).has_value() && !input_material(in, -1).has_value());
+}
+
 void glb_feathers_matched_by_id() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
     // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
@@ -344,6 +397,7 @@ const std::map<std::string, std::function<void()>> kCases = {
     {"glb_layout_and_frames", glb_layout_and_frames},
     {"glb_feather_attributes", glb_feather_attributes},
     {"glb_feather_material", glb_feather_material},
+    {"glb_body_material", glb_body_material},
     {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
     {"glb_rest_only", glb_rest_only},
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
