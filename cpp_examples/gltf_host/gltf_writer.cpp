@@ -145,6 +145,9 @@ int body_material(GlbBuilder& b, const BodyMaterial& in) {
 // card, opaque inside, transparent outside (a one-pixel ramp at the edge);
 // near-white so the material's colour shows, with soft slanted barbs and a
 // darker shaft that runs from the root to near the tip.
+constexpr double kVaneHalfWidth = 0.36;  // largest |v - 0.5| of the vane
+constexpr double kVaneEnd = 0.9;         // u where the vane's rounded tip ends
+
 std::vector<unsigned char> vane_texture(int width, int height) {
     std::vector<unsigned char> rgba(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
     const double pi = std::acos(-1.0);
@@ -152,7 +155,7 @@ std::vector<unsigned char> vane_texture(int width, int height) {
         for (int x = 0; x < width; ++x) {
             const double u = (x + 0.5) / width, v = (y + 0.5) / height;
             const double across = std::fabs(v - 0.5);
-            const double half = 0.5 * std::pow(std::sin(pi * u), 0.6);
+            const double half = kVaneHalfWidth * std::pow(std::sin(pi * std::min(u / kVaneEnd, 1.0)), 0.6);
             const bool shaft = across < 1.5 / height && u < 0.97;
             double alpha = std::clamp((half - across) * height + 0.5, 0.0, 1.0);
             // Barbs slant from the shaft towards the tip.
