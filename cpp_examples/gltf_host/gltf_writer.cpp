@@ -94,6 +94,27 @@ public:
         return static_cast<int>(model_.textures.size() - 1);
     }
 
+    // An image stored as encoded bytes in the buffer; returns the texture's index.
+    int encoded_texture(const char* name, const EncodedTexture& in) {
+        tinygltf::Image image;
+        image.name = name;
+        image.mimeType = in.mime_type;
+        image.bufferView = view(in.bytes.data(), in.bytes.size(), 0);
+        model_.images.push_back(std::move(image));
+        tinygltf::Sampler sampler;
+        sampler.magFilter = in.mag_filter;
+        sampler.minFilter = in.min_filter;
+        sampler.wrapS = in.wrap_s;
+        sampler.wrapT = in.wrap_t;
+        model_.samplers.push_back(sampler);
+        tinygltf::Texture t;
+        t.name = name;
+        t.source = static_cast<int>(model_.images.size() - 1);
+        t.sampler = static_cast<int>(model_.samplers.size() - 1);
+        model_.textures.push_back(std::move(t));
+        return static_cast<int>(model_.textures.size() - 1);
+    }
+
     tinygltf::Model& model() { return model_; }
 
 private:
@@ -136,6 +157,10 @@ int body_material(GlbBuilder& b, const BodyMaterial& in) {
     if (in.emissive != std::array<double, 3>{0, 0, 0}) m.emissiveFactor.assign(in.emissive.begin(), in.emissive.end());
     m.alphaMode = in.alpha_mode;
     m.alphaCutoff = in.alpha_cutoff;
+    if (in.base_color_texture) {
+        m.pbrMetallicRoughness.baseColorTexture.index = b.encoded_texture(in.name.c_str(), *in.base_color_texture);
+        m.pbrMetallicRoughness.baseColorTexture.texCoord = 0;
+    }
     return index;
 }
 
@@ -255,6 +280,28 @@ void add_frame_switch(GlbBuilder& b, const std::vector<double>& times, const std
     b.model().animations.push_back(std::move(anim));
 }
 
+// Texture `index` of `model` when its image is PNG or JPEG bytes in a buffer view.
+std::optional<EncodedTexture> encoded_texture(const tinygltf::Model& model, int index) {
+    if (index < 0 || static_cast<size_t>(index) >= model.textures.size()) return std::nullopt;
+    const tinygltf::Texture& t = model.textures[static_cast<size_t>(index)];
+    if (t.source < 0 || static_cast<size_t>(t.source) >= model.images.size()) return std::nullopt;
+    const tinygltf::Image& image = model.images[static_cast<size_t>(t.source)];
+    if (image.mimeType != "image/png" && image.mimeType != "image/jpeg") return std::nullopt;
+    if (image.bufferView < 0 || static_cast<size_t>(image.bufferView) >= model.bufferViews.size()) return std::nullopt;
+    const tinygltf::BufferView& v = model.bufferViews[static_cast<size_t>(image.bufferView)];
+    if (v.buffer < 0 || static_cast<size_t>(v.buffer) >= model.buffers.size()) return std::nullopt;
+    const std::vector<unsigned char>& data = model.buffers[static_cast<size_t>(v.buffer)].data;
+    if (v.byteLength == 0 || v.byteOffset > data.size() || v.byteLength > data.size() - v.byteOffset) return std::nullopt;
+    EncodedTexture out;
+    out.bytes.assign(data.begin() + static_cast<long>(v.byteOffset), data.begin() + static_cast<long>(v.byteOffset + v.byteLength));
+    out.mime_type = image.mimeType;
+    if (t.sampler >= 0 && static_cast<size_t>(t.sampler) < model.samplers.size()) {
+        const tinygltf::Sampler& s = model.samplers[static_cast<size_t>(t.sampler)];
+        out.mag_filter = s.magFilter, out.min_filter = s.minFilter, out.wrap_s = s.wrapS, out.wrap_t = s.wrapT;
+    }
+    return out;
+}
+
 }  // namespace
 
 std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index) {
@@ -269,9 +316,13 @@ std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mes
         BodyMaterial out;
         if (!m.name.empty()) out.name = m.name;
         if (pbr.baseColorFactor.size() != 4 || !std::all_of(pbr.baseColorFactor.begin(), pbr.baseColorFactor.end(), in_unit)) return std::nullopt;
-        // A base colour texture is not carried over: its factor alone (white
-        // by default) would not be the body's colour, so the host's stays.
-        if (pbr.baseColorTexture.index < 0) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
+        // A base colour texture that cannot be carried: its factor alone
+        // (white by default) would not be the body's colour, so the host's stays.
+        if (pbr.baseColorTexture.index >= 0) {
+            out.base_color_texture = encoded_texture(model, pbr.baseColorTexture.index);
+            out.base_color_uv_set = pbr.baseColorTexture.texCoord;
+        }
+        if (pbr.baseColorTexture.index < 0 || out.base_color_texture) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
         if (!in_unit(pbr.metallicFactor) || !in_unit(pbr.roughnessFactor)) return std::nullopt;
         out.metallic = pbr.metallicFactor;
         out.roughness = pbr.roughnessFactor;
@@ -332,8 +383,15 @@ void AnimationRecorder::add_frame(double seconds, const std::vector<float>& body
 
 void AnimationRecorder::write_glb(const std::string& path) const {
     GlbBuilder b;
-    std::vector<int> nodes{add_animated_mesh(b, "body", AnimatedAttributes{body_rest_, body_frames_}, body_indices_,
-                                             body_material(b, body_material_))};
+    AnimatedAttributes body{body_rest_, body_frames_};
+    BodyMaterial material = body_material_;
+    if (material.base_color_texture && material.uvs.size() / 2 == body_rest_.size() / 3 && material.uvs.size() % 2 == 0) {
+        body.uvs = &material.uvs;
+    } else if (material.base_color_texture) {
+        material.base_color_texture.reset();  // no UVs for it: the host's grey
+        material.base_color = BodyMaterial{}.base_color;
+    }
+    std::vector<int> nodes{add_animated_mesh(b, "body", body, body_indices_, body_material(b, material))};
     if (!feather_rest_.positions.empty()) {
         std::vector<float> ids;
         ids.reserve(feather_rest_.positions.size() / 3);

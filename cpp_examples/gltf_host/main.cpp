@@ -39,6 +39,13 @@ std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps,
         auto scene = std::make_unique<GltfScene>(model, opt.mesh, opt.animation);
         maps = read_maps(*scene, model, opt);
         material = input_material(model, scene->mesh_index());
+        if (material && material->base_color_texture) {
+            try {
+                material->uvs = scene->vertex_attribute(model, "TEXCOORD_" + std::to_string(material->base_color_uv_set), 0, 2);
+            } catch (const std::exception&) {
+                material->uvs.clear();  // a primitive without them: the writer drops the texture
+            }
+        }
         return scene;
     }
     const auto [rings, segments] = opt.model_resolution.value_or(std::array<uint32_t, 2>{ProceduralBody::kRings, ProceduralBody::kSegments});

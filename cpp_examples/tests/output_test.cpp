@@ -272,6 +272,93 @@ void glb_body_material() {
     CHECK(!input_material(in, 0).has_value() && !input_material(in, 1).has_value() && !input_material(in, -1).has_value());
 }
 
+// A 2x1 RGBA PNG: a red pixel, then a blue one.
+const std::vector<unsigned char> kPng{
+    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52, 0x00, 0x00, 0x00, 0x02,
+    0x00, 0x00, 0x00, 0x01, 0x08, 0x06, 0x00, 0x00, 0x00, 0xf4, 0x22, 0x7f, 0x8a, 0x00, 0x00, 0x00, 0x0e, 0x49, 0x44, 0x41,
+    0x54, 0x78, 0x9c, 0x63, 0xf8, 0xcf, 0xc0, 0x00, 0x42, 0xff, 0x01, 0x0f, 0xf9, 0x03, 0xfd, 0x85, 0x11, 0x99, 0x76, 0x00,
+    0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+
+void glb_body_texture() {
+    // The input's base colour texture (a PNG in a buffer view) is carried
+    // with its sampler, on the body's UVs written as TEXCOORD_0.
+    tinygltf::Model in;
+    in.buffers.resize(1);
+    in.buffers[0].data.assign(8, 0);  // the image does not start the buffer
+    in.buffers[0].data.insert(in.buffers[0].data.end(), kPng.begin(), kPng.end());
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = 8;
+    view.byteLength = kPng.size();
+    in.bufferViews.push_back(view);
+    tinygltf::Image image;
+    image.mimeType = "image/png";
+    image.bufferView = 0;
+    in.images.push_back(image);
+    tinygltf::Sampler sampler;
+    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_NEAREST;
+    sampler.wrapS = TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT;
+    in.samplers.push_back(sampler);
+    tinygltf::Texture texture;
+    texture.source = 0;
+    texture.sampler = 0;
+    in.textures.push_back(texture);
+    tinygltf::Material skin;
+    skin.name = "skin";
+    skin.pbrMetallicRoughness.baseColorFactor = {1, 0.5, 1, 1};
+    skin.pbrMetallicRoughness.baseColorTexture.index = 0;
+    skin.pbrMetallicRoughness.baseColorTexture.texCoord = 1;
+    in.materials.push_back(skin);
+    in.meshes.resize(1);
+    in.meshes[0].primitives.resize(1);
+    in.meshes[0].primitives[0].material = 0;
+
+    std::optional<BodyMaterial> got = input_material(in, 0);
+    CHECK(got && got->base_color_texture && got->base_color_uv_set == 1);
+    if (!got || !got->base_color_texture) return;
+    CHECK(got->base_color_texture->bytes == kPng && got->base_color_texture->mime_type == "image/png");
+    CHECK(got->base_color_texture->mag_filter == TINYGLTF_TEXTURE_FILTER_NEAREST && got->base_color_texture->wrap_s == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT);
+    CHECK((got->base_color == std::array<double, 4>{1, 0.5, 1, 1}));  // carried with its texture, the factor too
+
+    got->uvs = {0, 0, 1, 0, 0, 1};
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    rec.set_body_material(*got);
+    rec.write_glb(path("textured.glb"));
+    const tinygltf::Model m = read_back(path("textured.glb"));
+    const tinygltf::Primitive& body = m.meshes[0].primitives[0];
+    CHECK(body.attributes.count("TEXCOORD_0") == 1);
+    if (body.attributes.count("TEXCOORD_0") == 1) CHECK((floats(m, body.attributes.at("TEXCOORD_0")) == got->uvs));
+    const tinygltf::Material& out = m.materials[static_cast<size_t>(body.material)];
+    const tinygltf::TextureInfo& info = out.pbrMetallicRoughness.baseColorTexture;
+    CHECK(out.name == "skin" && info.index >= 0 && info.texCoord == 0);
+    if (info.index < 0) return;
+    const tinygltf::Texture& t = m.textures[static_cast<size_t>(info.index)];
+    const tinygltf::Image& decoded = m.images[static_cast<size_t>(t.source)];
+    CHECK(decoded.width == 2 && decoded.height == 1 && decoded.image.size() == 8);
+    if (decoded.image.size() == 8) CHECK(decoded.image[0] == 255 && decoded.image[2] == 0 && decoded.image[4] == 0 && decoded.image[6] == 255);
+    CHECK(m.samplers[static_cast<size_t>(t.sampler)].magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST);
+
+    // Without UVs for every body vertex the texture is dropped: the host's grey, no TEXCOORD_0.
+    got->uvs = {0, 0};
+    AnimationRecorder bare(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    bare.set_body_material(*got);
+    bare.write_glb(path("untextured.glb"));
+    const tinygltf::Model u = read_back(path("untextured.glb"));
+    const tinygltf::Material& grey = u.materials[static_cast<size_t>(u.meshes[0].primitives[0].material)];
+    CHECK(grey.pbrMetallicRoughness.baseColorTexture.index < 0 && u.meshes[0].primitives[0].attributes.count("TEXCOORD_0") == 0);
+    const std::array<double, 4> host_grey = BodyMaterial{}.base_color;
+    CHECK(grey.pbrMetallicRoughness.baseColorFactor == std::vector<double>(host_grey.begin(), host_grey.end()));
+
+    // An image that is not a PNG or JPEG in a buffer view is not carried, nor one past its buffer.
+    in.images[0].mimeType = "image/webp";
+    got = input_material(in, 0);
+    CHECK(got && !got->base_color_texture && (got->base_color == BodyMaterial{}.base_color));
+    in.images[0].mimeType = "image/png";
+    in.bufferViews[0].byteLength = 1000;
+    got = input_material(in, 0);
+    CHECK(got && !got->base_color_texture);
+}
+
 void glb_feathers_matched_by_id() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
     // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
@@ -398,6 +485,7 @@ const std::map<std::string, std::function<void()>> kCases = {
     {"glb_feather_attributes", glb_feather_attributes},
     {"glb_feather_material", glb_feather_material},
     {"glb_body_material", glb_body_material},
+    {"glb_body_texture", glb_body_texture},
     {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
     {"glb_rest_only", glb_rest_only},
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
