@@ -37,13 +37,15 @@ public:
                         values.size() / width, type, {}, {});
     }
 
-    int scalars(const std::vector<float>& values, bool with_bounds) {
+    // Scalars of an animation sampler (vertex_data false) or a vertex attribute.
+    int scalars(const std::vector<float>& values, bool with_bounds, bool vertex_data = false) {
         std::vector<double> lo, hi;
         if (with_bounds && !values.empty()) {
             const auto [a, b] = std::minmax_element(values.begin(), values.end());
             lo = {*a}, hi = {*b};
         }
-        return accessor(view(values.data(), values.size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT, values.size(), TINYGLTF_TYPE_SCALAR, lo, hi);
+        return accessor(view(values.data(), values.size() * sizeof(float), vertex_data ? TINYGLTF_TARGET_ARRAY_BUFFER : 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                        values.size(), TINYGLTF_TYPE_SCALAR, lo, hi);
     }
 
     int indices(const std::vector<uint32_t>& idx, size_t vertex_count) {
@@ -65,33 +67,6 @@ public:
         m.doubleSided = double_sided;
         model_.materials.push_back(std::move(m));
         return static_cast<int>(model_.materials.size() - 1);
-    }
-
-    // An RGBA8 image the writer encodes as an embedded PNG, drawn with a
-    // linear, clamped sampler; returns the texture's index.
-    int texture(const char* name, std::vector<unsigned char> rgba, int width, int height) {
-        tinygltf::Image image;
-        image.name = name;
-        image.width = width;
-        image.height = height;
-        image.component = 4;
-        image.bits = 8;
-        image.pixel_type = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE;
-        image.mimeType = "image/png";
-        image.image = std::move(rgba);
-        model_.images.push_back(std::move(image));
-        tinygltf::Sampler sampler;
-        sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-        sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
-        sampler.wrapS = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
-        sampler.wrapT = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
-        model_.samplers.push_back(sampler);
-        tinygltf::Texture t;
-        t.name = name;
-        t.source = static_cast<int>(model_.images.size() - 1);
-        t.sampler = static_cast<int>(model_.samplers.size() - 1);
-        model_.textures.push_back(std::move(t));
-        return static_cast<int>(model_.textures.size() - 1);
     }
 
     // An image stored as encoded bytes in the buffer; returns the texture's index.
@@ -170,6 +145,60 @@ int body_material(GlbBuilder& b, const BodyMaterial& in) {
 // card, opaque inside, transparent outside (a one-pixel ramp at the edge);
 // near-white so the material's colour shows, with soft slanted barbs and a
 // darker shaft that runs from the root to near the tip.
+uint32_t crc32(const unsigned char* p, size_t n, uint32_t crc = 0) {
+    crc = ~crc;
+    for (size_t i = 0; i < n; ++i) {
+        crc ^= p[i];
+        for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+void put_u32(std::vector<unsigned char>& out, uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<unsigned char>(v >> shift));
+}
+
+void png_chunk(std::vector<unsigned char>& out, const char* type, const std::vector<unsigned char>& data) {
+    put_u32(out, static_cast<uint32_t>(data.size()));
+    const size_t start = out.size();
+    out.insert(out.end(), type, type + 4);
+    out.insert(out.end(), data.begin(), data.end());
+    put_u32(out, crc32(out.data() + start, out.size() - start));
+}
+
+// An RGBA8 image as PNG bytes: every row unfiltered, in stored
+// (uncompressed) deflate blocks; small images only (a few tens of KiB).
+std::vector<unsigned char> encode_png(const std::vector<unsigned char>& rgba, uint32_t width, uint32_t height) {
+    std::vector<unsigned char> raw;
+    raw.reserve((4 * size_t{width} + 1) * height);
+    for (uint32_t y = 0; y < height; ++y) {
+        raw.push_back(0);  // filter: none
+        const auto row = rgba.begin() + static_cast<long>(4 * size_t{width} * y);
+        raw.insert(raw.end(), row, row + static_cast<long>(4 * size_t{width}));
+    }
+    std::vector<unsigned char> z{0x78, 0x01};  // zlib header: deflate, 32 KiB window
+    for (size_t at = 0; at < raw.size() || at == 0; at += 65535) {
+        const size_t n = std::min<size_t>(65535, raw.size() - at);
+        z.push_back(at + n == raw.size() ? 1 : 0);  // final block?
+        z.insert(z.end(), {static_cast<unsigned char>(n), static_cast<unsigned char>(n >> 8), static_cast<unsigned char>(~n),
+                           static_cast<unsigned char>(~n >> 8)});
+        z.insert(z.end(), raw.begin() + static_cast<long>(at), raw.begin() + static_cast<long>(at + n));
+        if (raw.empty()) break;
+    }
+    uint32_t a = 1, b = 0;  // Adler-32
+    for (unsigned char c : raw) a = (a + c) % 65521, b = (b + a) % 65521;
+    put_u32(z, (b << 16) | a);
+    std::vector<unsigned char> png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::vector<unsigned char> header;
+    put_u32(header, width);
+    put_u32(header, height);
+    header.insert(header.end(), {8, 6, 0, 0, 0});  // 8-bit RGBA, deflate, no filter method, no interlace
+    png_chunk(png, "IHDR", header);
+    png_chunk(png, "IDAT", z);
+    png_chunk(png, "IEND", {});
+    return png;
+}
+
 constexpr double kVaneHalfWidth = 0.36;  // largest |v - 0.5| of the vane
 constexpr double kVaneEnd = 0.9;         // u where the vane's rounded tip ends
 
@@ -197,10 +226,16 @@ std::vector<unsigned char> vane_texture(int width, int height) {
 }
 
 // The default feather material: double-sided, alpha-masked by the vane
-// texture, whose near-white colour a brown factor tints.
+// texture (a PNG in the buffer), whose near-white colour a brown factor tints.
 int feather_material(GlbBuilder& b) {
     constexpr int kWidth = 128, kHeight = 64;
-    const int texture = b.texture("feather_vane", vane_texture(kWidth, kHeight), kWidth, kHeight);
+    EncodedTexture png;
+    png.bytes = encode_png(vane_texture(kWidth, kHeight), kWidth, kHeight);
+    png.mime_type = "image/png";
+    png.mag_filter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    png.min_filter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+    png.wrap_s = png.wrap_t = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+    const int texture = b.encoded_texture("feather_vane", png);
     const int index = b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true);
     tinygltf::Material& m = b.model().materials[static_cast<size_t>(index)];
     m.pbrMetallicRoughness.baseColorTexture.index = texture;
@@ -235,7 +270,7 @@ int add_animated_mesh(GlbBuilder& b, const char* name, const AnimatedAttributes&
     prim.attributes["POSITION"] = b.positions(a.rest);
     if (a.normals) prim.attributes["NORMAL"] = b.vectors(*a.normals, TINYGLTF_TYPE_VEC3, 3);
     if (a.uvs) prim.attributes["TEXCOORD_0"] = b.vectors(*a.uvs, TINYGLTF_TYPE_VEC2, 2);
-    if (a.ids) prim.attributes["_FEATHER_ID"] = b.scalars(*a.ids, false);
+    if (a.ids) prim.attributes["_FEATHER_ID"] = b.scalars(*a.ids, false, true);
     prim.indices = b.indices(indices, a.rest.size() / 3);
     for (size_t k = 0; k < a.frames.size(); ++k) {
         std::map<std::string, int> target{{"POSITION", b.positions(difference(a.frames[k], a.rest))}};
