@@ -341,38 +341,46 @@ std::optional<EncodedTexture> encoded_texture(const tinygltf::Model& model, int 
 
 std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index) {
     if (mesh_index < 0 || static_cast<size_t>(mesh_index) >= model.meshes.size()) return std::nullopt;
+    // The triangle primitive with a material and the most vertex references (indices, else vertices).
+    const tinygltf::Primitive* largest = nullptr;
+    size_t most = 0;
     for (const tinygltf::Primitive& p : model.meshes[static_cast<size_t>(mesh_index)].primitives) {
         const bool triangles = p.mode == -1 || p.mode == TINYGLTF_MODE_TRIANGLES || p.mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
                                p.mode == TINYGLTF_MODE_TRIANGLE_FAN;
         if (!triangles || p.material < 0) continue;
-        if (static_cast<size_t>(p.material) >= model.materials.size()) return std::nullopt;
-        const tinygltf::Material& m = model.materials[static_cast<size_t>(p.material)];
-        const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
-        BodyMaterial out;
-        if (!m.name.empty()) out.name = m.name;
-        if (pbr.baseColorFactor.size() != 4 || !std::all_of(pbr.baseColorFactor.begin(), pbr.baseColorFactor.end(), in_unit)) return std::nullopt;
-        // A base colour texture that cannot be carried: its factor alone
-        // (white by default) would not be the body's colour, so the host's stays.
-        if (pbr.baseColorTexture.index >= 0) {
-            out.base_color_texture = encoded_texture(model, pbr.baseColorTexture.index);
-            out.base_color_uv_set = pbr.baseColorTexture.texCoord;
-        }
-        if (pbr.baseColorTexture.index < 0 || out.base_color_texture) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
-        if (!in_unit(pbr.metallicFactor) || !in_unit(pbr.roughnessFactor)) return std::nullopt;
-        out.metallic = pbr.metallicFactor;
-        out.roughness = pbr.roughnessFactor;
-        if (!m.emissiveFactor.empty()) {
-            if (m.emissiveFactor.size() != 3 || !std::all_of(m.emissiveFactor.begin(), m.emissiveFactor.end(), in_unit)) return std::nullopt;
-            std::copy_n(m.emissiveFactor.begin(), 3, out.emissive.begin());
-        }
-        out.double_sided = m.doubleSided;
-        if (m.alphaMode != "OPAQUE" && m.alphaMode != "MASK" && m.alphaMode != "BLEND") return std::nullopt;
-        if (!std::isfinite(m.alphaCutoff) || m.alphaCutoff < 0) return std::nullopt;
-        out.alpha_mode = m.alphaMode;
-        out.alpha_cutoff = m.alphaCutoff;
-        return out;
+        const auto position = p.attributes.find("POSITION");
+        const int acc = p.indices >= 0 ? p.indices : position != p.attributes.end() ? position->second : -1;
+        const size_t n = acc >= 0 && static_cast<size_t>(acc) < model.accessors.size() ? model.accessors[static_cast<size_t>(acc)].count : 0;
+        if (largest == nullptr || n > most) largest = &p, most = n;
     }
-    return std::nullopt;
+    if (largest == nullptr) return std::nullopt;
+    const tinygltf::Primitive& p = *largest;
+    if (static_cast<size_t>(p.material) >= model.materials.size()) return std::nullopt;
+    const tinygltf::Material& m = model.materials[static_cast<size_t>(p.material)];
+    const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    BodyMaterial out;
+    if (!m.name.empty()) out.name = m.name;
+    if (pbr.baseColorFactor.size() != 4 || !std::all_of(pbr.baseColorFactor.begin(), pbr.baseColorFactor.end(), in_unit)) return std::nullopt;
+    // A base colour texture that cannot be carried: its factor alone
+    // (white by default) would not be the body's colour, so the host's stays.
+    if (pbr.baseColorTexture.index >= 0) {
+        out.base_color_texture = encoded_texture(model, pbr.baseColorTexture.index);
+        out.base_color_uv_set = pbr.baseColorTexture.texCoord;
+    }
+    if (pbr.baseColorTexture.index < 0 || out.base_color_texture) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
+    if (!in_unit(pbr.metallicFactor) || !in_unit(pbr.roughnessFactor)) return std::nullopt;
+    out.metallic = pbr.metallicFactor;
+    out.roughness = pbr.roughnessFactor;
+    if (!m.emissiveFactor.empty()) {
+        if (m.emissiveFactor.size() != 3 || !std::all_of(m.emissiveFactor.begin(), m.emissiveFactor.end(), in_unit)) return std::nullopt;
+        std::copy_n(m.emissiveFactor.begin(), 3, out.emissive.begin());
+    }
+    out.double_sided = m.doubleSided;
+    if (m.alphaMode != "OPAQUE" && m.alphaMode != "MASK" && m.alphaMode != "BLEND") return std::nullopt;
+    if (!std::isfinite(m.alphaCutoff) || m.alphaCutoff < 0) return std::nullopt;
+    out.alpha_mode = m.alphaMode;
+    out.alpha_cutoff = m.alphaCutoff;
+    return out;
 }
 
 AnimationRecorder::AnimationRecorder(std::vector<float> body_rest, std::vector<uint32_t> body_indices, const std::vector<PlumageFeather>& feathers,

@@ -44,7 +44,8 @@ struct BodyMaterial {
     std::vector<float> uvs;      // that set, 2 per body vertex (written as TEXCOORD_0)
 };
 
-// The material of mesh `mesh_index`'s first triangle primitive that has one,
+// The material of mesh `mesh_index`'s largest triangle primitive (by index
+// count, else vertex count) that has one,
 // by its factors (name, base colour, metallic, roughness, emissive,
 // double-sided, alpha mode and cutoff) and its base colour texture when its
 // image is stored in a buffer view as PNG or JPEG (the caller adds the UVs);

@@ -230,11 +230,17 @@ void glb_body_material() {
 
     tinygltf::Model in;
     in.meshes.resize(1);
-    tinygltf::Primitive points, tris;
+    tinygltf::Primitive points, small, tris;
     points.mode = TINYGLTF_MODE_POINTS;
     points.material = 0;  // not a triangle primitive: passed over
+    small.material = 0;   // fewer triangles: passed over
+    small.indices = 0;
     tris.material = 1;
-    in.meshes[0].primitives = {points, tris};
+    tris.indices = 1;
+    in.accessors.resize(2);
+    in.accessors[0].count = 3;
+    in.accessors[1].count = 30;
+    in.meshes[0].primitives = {points, small, tris};
     in.materials.resize(2);
     tinygltf::Material& skin = in.materials[1];
     skin.name = "skin";
@@ -263,11 +269,13 @@ void glb_body_material() {
     skin.pbrMetallicRoughness.baseColorTexture.index = -1;
 
     // No material, a dangling index, factors out of range, no such mesh: nothing.
+    in.meshes[0].primitives[2].material = -1;
+    CHECK(input_material(in, 0).has_value() && input_material(in, 0)->name == "body");  // the smaller one's (unnamed)
     in.meshes[0].primitives[1].material = -1;
     CHECK(!input_material(in, 0).has_value());
-    in.meshes[0].primitives[1].material = 7;
+    in.meshes[0].primitives[2].material = 7;
     CHECK(!input_material(in, 0).has_value());
-    in.meshes[0].primitives[1].material = 1;
+    in.meshes[0].primitives[2].material = 1;
     skin.pbrMetallicRoughness.baseColorFactor = {2, 0, 0, 1};
     CHECK(!input_material(in, 0).has_value() && !input_material(in, 1).has_value() && !input_material(in, -1).has_value());
 }
