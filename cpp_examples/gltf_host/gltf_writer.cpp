@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -36,13 +37,15 @@ public:
                         values.size() / width, type, {}, {});
     }
 
-    int scalars(const std::vector<float>& values, bool with_bounds) {
+    // Scalars of an animation sampler (vertex_data false) or a vertex attribute.
+    int scalars(const std::vector<float>& values, bool with_bounds, bool vertex_data = false) {
         std::vector<double> lo, hi;
         if (with_bounds && !values.empty()) {
             const auto [a, b] = std::minmax_element(values.begin(), values.end());
             lo = {*a}, hi = {*b};
         }
-        return accessor(view(values.data(), values.size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT, values.size(), TINYGLTF_TYPE_SCALAR, lo, hi);
+        return accessor(view(values.data(), values.size() * sizeof(float), vertex_data ? TINYGLTF_TARGET_ARRAY_BUFFER : 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                        values.size(), TINYGLTF_TYPE_SCALAR, lo, hi);
     }
 
     int indices(const std::vector<uint32_t>& idx, size_t vertex_count) {
@@ -64,6 +67,27 @@ public:
         m.doubleSided = double_sided;
         model_.materials.push_back(std::move(m));
         return static_cast<int>(model_.materials.size() - 1);
+    }
+
+    // An image stored as encoded bytes in the buffer; returns the texture's index.
+    int encoded_texture(const char* name, const EncodedTexture& in) {
+        tinygltf::Image image;
+        image.name = name;
+        image.mimeType = in.mime_type;
+        image.bufferView = view(in.bytes.data(), in.bytes.size(), 0);
+        model_.images.push_back(std::move(image));
+        tinygltf::Sampler sampler;
+        sampler.magFilter = in.mag_filter;
+        sampler.minFilter = in.min_filter;
+        sampler.wrapS = in.wrap_s;
+        sampler.wrapT = in.wrap_t;
+        model_.samplers.push_back(sampler);
+        tinygltf::Texture t;
+        t.name = name;
+        t.source = static_cast<int>(model_.images.size() - 1);
+        t.sampler = static_cast<int>(model_.samplers.size() - 1);
+        model_.textures.push_back(std::move(t));
+        return static_cast<int>(model_.textures.size() - 1);
     }
 
     tinygltf::Model& model() { return model_; }
@@ -98,6 +122,129 @@ private:
     tinygltf::Model model_;
 };
 
+bool in_unit(double x) { return std::isfinite(x) && x >= 0 && x <= 1; }
+
+int body_material(GlbBuilder& b, const BodyMaterial& in) {
+    const int index = b.material(in.name.c_str(), in.base_color, in.double_sided);
+    tinygltf::Material& m = b.model().materials[static_cast<size_t>(index)];
+    m.pbrMetallicRoughness.metallicFactor = in.metallic;
+    m.pbrMetallicRoughness.roughnessFactor = in.roughness;
+    if (in.emissive != std::array<double, 3>{0, 0, 0}) m.emissiveFactor.assign(in.emissive.begin(), in.emissive.end());
+    m.alphaMode = in.alpha_mode;
+    m.alphaCutoff = in.alpha_cutoff;
+    if (in.base_color_texture) {
+        m.pbrMetallicRoughness.baseColorTexture.index = b.encoded_texture(in.name.c_str(), *in.base_color_texture);
+        m.pbrMetallicRoughness.baseColorTexture.texCoord = 0;
+    }
+    return index;
+}
+
+// The feathers' vane texture over the card's UVs: x is u (root 0 to tip 1
+// along the shaft), y is v (0 to 1 across the vanes, the shaft at 0.5). The
+// vane is |v - 0.5| < 0.5 sin(pi u)^0.6, a rounded outline over the kite
+// card, opaque inside, transparent outside (a one-pixel ramp at the edge);
+// near-white so the material's colour shows, with soft slanted barbs and a
+// darker shaft that runs from the root to near the tip.
+uint32_t crc32(const unsigned char* p, size_t n, uint32_t crc = 0) {
+    crc = ~crc;
+    for (size_t i = 0; i < n; ++i) {
+        crc ^= p[i];
+        for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+    }
+    return ~crc;
+}
+
+void put_u32(std::vector<unsigned char>& out, uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<unsigned char>(v >> shift));
+}
+
+void png_chunk(std::vector<unsigned char>& out, const char* type, const std::vector<unsigned char>& data) {
+    put_u32(out, static_cast<uint32_t>(data.size()));
+    const size_t start = out.size();
+    out.insert(out.end(), type, type + 4);
+    out.insert(out.end(), data.begin(), data.end());
+    put_u32(out, crc32(out.data() + start, out.size() - start));
+}
+
+// An RGBA8 image as PNG bytes: every row unfiltered, in stored
+// (uncompressed) deflate blocks; small images only (a few tens of KiB).
+std::vector<unsigned char> encode_png(const std::vector<unsigned char>& rgba, uint32_t width, uint32_t height) {
+    std::vector<unsigned char> raw;
+    raw.reserve((4 * size_t{width} + 1) * height);
+    for (uint32_t y = 0; y < height; ++y) {
+        raw.push_back(0);  // filter: none
+        const auto row = rgba.begin() + static_cast<long>(4 * size_t{width} * y);
+        raw.insert(raw.end(), row, row + static_cast<long>(4 * size_t{width}));
+    }
+    std::vector<unsigned char> z{0x78, 0x01};  // zlib header: deflate, 32 KiB window
+    for (size_t at = 0; at < raw.size() || at == 0; at += 65535) {
+        const size_t n = std::min<size_t>(65535, raw.size() - at);
+        z.push_back(at + n == raw.size() ? 1 : 0);  // final block?
+        z.insert(z.end(), {static_cast<unsigned char>(n), static_cast<unsigned char>(n >> 8), static_cast<unsigned char>(~n),
+                           static_cast<unsigned char>(~n >> 8)});
+        z.insert(z.end(), raw.begin() + static_cast<long>(at), raw.begin() + static_cast<long>(at + n));
+        if (raw.empty()) break;
+    }
+    uint32_t a = 1, b = 0;  // Adler-32
+    for (unsigned char c : raw) a = (a + c) % 65521, b = (b + a) % 65521;
+    put_u32(z, (b << 16) | a);
+    std::vector<unsigned char> png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    std::vector<unsigned char> header;
+    put_u32(header, width);
+    put_u32(header, height);
+    header.insert(header.end(), {8, 6, 0, 0, 0});  // 8-bit RGBA, deflate, no filter method, no interlace
+    png_chunk(png, "IHDR", header);
+    png_chunk(png, "IDAT", z);
+    png_chunk(png, "IEND", {});
+    return png;
+}
+
+constexpr double kVaneHalfWidth = 0.36;  // largest |v - 0.5| of the vane
+constexpr double kVaneEnd = 0.9;         // u where the vane's rounded tip ends
+
+std::vector<unsigned char> vane_texture(int width, int height) {
+    std::vector<unsigned char> rgba(static_cast<size_t>(width) * static_cast<size_t>(height) * 4);
+    const double pi = std::acos(-1.0);
+    for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+            const double u = (x + 0.5) / width, v = (y + 0.5) / height;
+            const double across = std::fabs(v - 0.5);
+            const double half = kVaneHalfWidth * std::pow(std::sin(pi * std::min(u / kVaneEnd, 1.0)), 0.6);
+            const bool shaft = across < 1.5 / height && u < 0.97;
+            double alpha = std::clamp((half - across) * height + 0.5, 0.0, 1.0);
+            // Barbs slant from the shaft towards the tip.
+            const double barb = 0.5 + 0.5 * std::cos(2 * pi * (24 * u - 6 * across));
+            double shade = (0.82 + 0.18 * barb) * (1.0 - 0.25 * across / std::max(half, 1e-6) * (across < half));
+            if (shaft) alpha = 1.0, shade = 0.45;
+            unsigned char* p = &rgba[(static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 4];
+            const auto byte = [](double c) { return static_cast<unsigned char>(std::lround(std::clamp(c, 0.0, 1.0) * 255)); };
+            p[0] = p[1] = p[2] = byte(shade);
+            p[3] = byte(alpha);
+        }
+    }
+    return rgba;
+}
+
+// The default feather material: double-sided, alpha-masked by the vane
+// texture (a PNG in the buffer), whose near-white colour a brown factor tints.
+int feather_material(GlbBuilder& b) {
+    constexpr int kWidth = 128, kHeight = 64;
+    EncodedTexture png;
+    png.bytes = encode_png(vane_texture(kWidth, kHeight), kWidth, kHeight);
+    png.mime_type = "image/png";
+    png.mag_filter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    png.min_filter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+    png.wrap_s = png.wrap_t = TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+    const int texture = b.encoded_texture("feather_vane", png);
+    const int index = b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true);
+    tinygltf::Material& m = b.model().materials[static_cast<size_t>(index)];
+    m.pbrMetallicRoughness.baseColorTexture.index = texture;
+    m.pbrMetallicRoughness.baseColorTexture.texCoord = 0;
+    m.alphaMode = "MASK";
+    m.alphaCutoff = 0.5;
+    return index;
+}
+
 // The vertex attributes of one animated mesh: the rest pose and, per
 // frame, the positions (and normals, when given) its morph targets reach.
 struct AnimatedAttributes {
@@ -123,7 +270,7 @@ int add_animated_mesh(GlbBuilder& b, const char* name, const AnimatedAttributes&
     prim.attributes["POSITION"] = b.positions(a.rest);
     if (a.normals) prim.attributes["NORMAL"] = b.vectors(*a.normals, TINYGLTF_TYPE_VEC3, 3);
     if (a.uvs) prim.attributes["TEXCOORD_0"] = b.vectors(*a.uvs, TINYGLTF_TYPE_VEC2, 2);
-    if (a.ids) prim.attributes["_FEATHER_ID"] = b.scalars(*a.ids, false);
+    if (a.ids) prim.attributes["_FEATHER_ID"] = b.scalars(*a.ids, false, true);
     prim.indices = b.indices(indices, a.rest.size() / 3);
     for (size_t k = 0; k < a.frames.size(); ++k) {
         std::map<std::string, int> target{{"POSITION", b.positions(difference(a.frames[k], a.rest))}};
@@ -168,7 +315,73 @@ void add_frame_switch(GlbBuilder& b, const std::vector<double>& times, const std
     b.model().animations.push_back(std::move(anim));
 }
 
+// Texture `index` of `model` when its image is PNG or JPEG bytes in a buffer view.
+std::optional<EncodedTexture> encoded_texture(const tinygltf::Model& model, int index) {
+    if (index < 0 || static_cast<size_t>(index) >= model.textures.size()) return std::nullopt;
+    const tinygltf::Texture& t = model.textures[static_cast<size_t>(index)];
+    if (t.source < 0 || static_cast<size_t>(t.source) >= model.images.size()) return std::nullopt;
+    const tinygltf::Image& image = model.images[static_cast<size_t>(t.source)];
+    if (image.mimeType != "image/png" && image.mimeType != "image/jpeg") return std::nullopt;
+    if (image.bufferView < 0 || static_cast<size_t>(image.bufferView) >= model.bufferViews.size()) return std::nullopt;
+    const tinygltf::BufferView& v = model.bufferViews[static_cast<size_t>(image.bufferView)];
+    if (v.buffer < 0 || static_cast<size_t>(v.buffer) >= model.buffers.size()) return std::nullopt;
+    const std::vector<unsigned char>& data = model.buffers[static_cast<size_t>(v.buffer)].data;
+    if (v.byteLength == 0 || v.byteOffset > data.size() || v.byteLength > data.size() - v.byteOffset) return std::nullopt;
+    EncodedTexture out;
+    out.bytes.assign(data.begin() + static_cast<long>(v.byteOffset), data.begin() + static_cast<long>(v.byteOffset + v.byteLength));
+    out.mime_type = image.mimeType;
+    if (t.sampler >= 0 && static_cast<size_t>(t.sampler) < model.samplers.size()) {
+        const tinygltf::Sampler& s = model.samplers[static_cast<size_t>(t.sampler)];
+        out.mag_filter = s.magFilter, out.min_filter = s.minFilter, out.wrap_s = s.wrapS, out.wrap_t = s.wrapT;
+    }
+    return out;
+}
+
 }  // namespace
+
+std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index) {
+    if (mesh_index < 0 || static_cast<size_t>(mesh_index) >= model.meshes.size()) return std::nullopt;
+    // The triangle primitive with a material and the most vertex references (indices, else vertices).
+    const tinygltf::Primitive* largest = nullptr;
+    size_t most = 0;
+    for (const tinygltf::Primitive& p : model.meshes[static_cast<size_t>(mesh_index)].primitives) {
+        const bool triangles = p.mode == -1 || p.mode == TINYGLTF_MODE_TRIANGLES || p.mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+                               p.mode == TINYGLTF_MODE_TRIANGLE_FAN;
+        if (!triangles || p.material < 0) continue;
+        const auto position = p.attributes.find("POSITION");
+        const int acc = p.indices >= 0 ? p.indices : position != p.attributes.end() ? position->second : -1;
+        const size_t n = acc >= 0 && static_cast<size_t>(acc) < model.accessors.size() ? model.accessors[static_cast<size_t>(acc)].count : 0;
+        if (largest == nullptr || n > most) largest = &p, most = n;
+    }
+    if (largest == nullptr) return std::nullopt;
+    const tinygltf::Primitive& p = *largest;
+    if (static_cast<size_t>(p.material) >= model.materials.size()) return std::nullopt;
+    const tinygltf::Material& m = model.materials[static_cast<size_t>(p.material)];
+    const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    BodyMaterial out;
+    if (!m.name.empty()) out.name = m.name;
+    if (pbr.baseColorFactor.size() != 4 || !std::all_of(pbr.baseColorFactor.begin(), pbr.baseColorFactor.end(), in_unit)) return std::nullopt;
+    // A base colour texture that cannot be carried: its factor alone
+    // (white by default) would not be the body's colour, so the host's stays.
+    if (pbr.baseColorTexture.index >= 0) {
+        out.base_color_texture = encoded_texture(model, pbr.baseColorTexture.index);
+        out.base_color_uv_set = pbr.baseColorTexture.texCoord;
+    }
+    if (pbr.baseColorTexture.index < 0 || out.base_color_texture) std::copy_n(pbr.baseColorFactor.begin(), 4, out.base_color.begin());
+    if (!in_unit(pbr.metallicFactor) || !in_unit(pbr.roughnessFactor)) return std::nullopt;
+    out.metallic = pbr.metallicFactor;
+    out.roughness = pbr.roughnessFactor;
+    if (!m.emissiveFactor.empty()) {
+        if (m.emissiveFactor.size() != 3 || !std::all_of(m.emissiveFactor.begin(), m.emissiveFactor.end(), in_unit)) return std::nullopt;
+        std::copy_n(m.emissiveFactor.begin(), 3, out.emissive.begin());
+    }
+    out.double_sided = m.doubleSided;
+    if (m.alphaMode != "OPAQUE" && m.alphaMode != "MASK" && m.alphaMode != "BLEND") return std::nullopt;
+    if (!std::isfinite(m.alphaCutoff) || m.alphaCutoff < 0) return std::nullopt;
+    out.alpha_mode = m.alphaMode;
+    out.alpha_cutoff = m.alphaCutoff;
+    return out;
+}
 
 AnimationRecorder::AnimationRecorder(std::vector<float> body_rest, std::vector<uint32_t> body_indices, const std::vector<PlumageFeather>& feathers,
                                      FeatherMeshData feather_mesh)
@@ -213,14 +426,21 @@ void AnimationRecorder::add_frame(double seconds, const std::vector<float>& body
 
 void AnimationRecorder::write_glb(const std::string& path) const {
     GlbBuilder b;
-    std::vector<int> nodes{add_animated_mesh(b, "body", AnimatedAttributes{body_rest_, body_frames_}, body_indices_,
-                                             b.material("body", {0.78, 0.72, 0.66, 1.0}, false))};
+    AnimatedAttributes body{body_rest_, body_frames_};
+    BodyMaterial material = body_material_;
+    if (material.base_color_texture && material.uvs.size() / 2 == body_rest_.size() / 3 && material.uvs.size() % 2 == 0) {
+        body.uvs = &material.uvs;
+    } else if (material.base_color_texture) {
+        material.base_color_texture.reset();  // no UVs for it: the host's grey
+        material.base_color = BodyMaterial{}.base_color;
+    }
+    std::vector<int> nodes{add_animated_mesh(b, "body", body, body_indices_, body_material(b, material))};
     if (!feather_rest_.positions.empty()) {
         std::vector<float> ids;
         ids.reserve(feather_rest_.positions.size() / 3);
         for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) ids.insert(ids.end(), feather_rest_.vertex_counts[f], static_cast<float>(f));
         const AnimatedAttributes feathers{feather_rest_.positions, feather_frames_, &feather_rest_.normals, &normal_frames_, &feather_rest_.uvs, &ids};
-        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, b.material("feathers", {0.45, 0.32, 0.2, 1.0}, true)));
+        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, feather_material(b)));
     }
     if (!times_.empty()) add_frame_switch(b, times_, nodes);
     tinygltf::Scene scene;

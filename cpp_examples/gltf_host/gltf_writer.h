@@ -6,12 +6,52 @@
 #include "plumage.h"
 #include "plumage_system.h"
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+namespace tinygltf {
+class Model;
+}
+
 namespace plumage_host {
+
+// An encoded image (PNG or JPEG bytes as the input stored them) and how
+// it is sampled.
+struct EncodedTexture {
+    std::vector<unsigned char> bytes;
+    std::string mime_type;  // image/png or image/jpeg
+    int mag_filter = -1, min_filter = -1;  // -1: not given
+    int wrap_s = 10497, wrap_t = 10497;    // REPEAT
+};
+
+// The body's material in the .glb: the host's plain default, or the input's
+// factors and its base colour texture (with the body's UVs for it).
+struct BodyMaterial {
+    std::string name = "body";
+    std::array<double, 4> base_color{0.78, 0.72, 0.66, 1.0};
+    double metallic = 0.0;
+    double roughness = 0.8;
+    std::array<double, 3> emissive{0, 0, 0};
+    bool double_sided = false;
+    std::string alpha_mode = "OPAQUE";  // OPAQUE, MASK or BLEND
+    double alpha_cutoff = 0.5;
+    std::optional<EncodedTexture> base_color_texture;
+    int base_color_uv_set = 0;  // n of the input's TEXCOORD_n for it
+    std::vector<float> uvs;      // that set, 2 per body vertex (written as TEXCOORD_0)
+};
+
+// The material of mesh `mesh_index`'s largest triangle primitive (by index
+// count, else vertex count) that has one,
+// by its factors (name, base colour, metallic, roughness, emissive,
+// double-sided, alpha mode and cutoff) and its base colour texture when its
+// image is stored in a buffer view as PNG or JPEG (the caller adds the UVs);
+// a base colour texture that cannot be carried keeps the host's grey.
+// Nothing when no primitive has one or its factors are out of glTF's ranges.
+std::optional<BodyMaterial> input_material(const tinygltf::Model& model, int mesh_index);
 
 class AnimationRecorder {
 public:
@@ -21,6 +61,9 @@ public:
 
     // One stepped frame at `seconds` (clip time).
     void add_frame(double seconds, const std::vector<float>& body, const std::vector<PlumageFeather>& feathers, const FeatherMeshData& feather_mesh);
+
+    // The body's material (the host's default unless set).
+    void set_body_material(BodyMaterial m) { body_material_ = std::move(m); }
 
     // Feathers of a frame that were not at rest (by id); they are left out.
     size_t untracked_feathers() const { return untracked_; }
@@ -45,6 +88,7 @@ private:
     std::vector<std::vector<float>> feather_frames_;
     std::vector<std::vector<float>> normal_frames_;
     size_t untracked_ = 0;
+    BodyMaterial body_material_;
 };
 
 }  // namespace plumage_host

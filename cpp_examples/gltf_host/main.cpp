@@ -33,11 +33,19 @@ VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const
     return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions)};
 }
 
-std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps) {
+std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps, std::optional<BodyMaterial>& material) {
     if (!opt.input.empty()) {
         const tinygltf::Model model = load_gltf_file(opt.input);
         auto scene = std::make_unique<GltfScene>(model, opt.mesh, opt.animation);
         maps = read_maps(*scene, model, opt);
+        material = input_material(model, scene->mesh_index());
+        if (material && material->base_color_texture) {
+            try {
+                material->uvs = scene->vertex_attribute(model, "TEXCOORD_" + std::to_string(material->base_color_uv_set), 0, 2);
+            } catch (const std::exception&) {
+                material->uvs.clear();  // a primitive without them: the writer drops the texture
+            }
+        }
         return scene;
     }
     const auto [rings, segments] = opt.model_resolution.value_or(std::array<uint32_t, 2>{ProceduralBody::kRings, ProceduralBody::kSegments});
@@ -129,7 +137,7 @@ class Session {
 public:
     explicit Session(const Options& opt) : opt_(opt) {
         const Stopwatch load_clock;
-        subject_ = open_subject(opt_, maps_);
+        subject_ = open_subject(opt_, maps_, body_material_);
         report_.set_timing("load_seconds", load_clock.seconds());
         report_.set_memory("after_load", memory_usage());
         clip_ = subject_->clip();
@@ -156,7 +164,10 @@ public:
         if (!opt_.poses.empty()) {
             poses_ = std::make_unique<PoseWriter>(opt_.poses, cfg, opt_.fps, subject_->rest_positions(), subject_->triangles(), times_, maps_);
         }
-        if (!opt_.out.empty()) recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
+        if (!opt_.out.empty()) {
+            recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
+            if (body_material_) recorder_->set_body_material(*body_material_);
+        }
     }
 
     void step_frames() {
@@ -212,6 +223,7 @@ private:
     Stopwatch total_;
     std::unique_ptr<AnimatedMesh> subject_;
     VertexMaps maps_;
+    std::optional<BodyMaterial> body_material_;  // the input mesh's, if it had one
     std::optional<ClipInfo> clip_;
     std::vector<double> times_;
     Report report_;

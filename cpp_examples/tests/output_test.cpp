@@ -9,6 +9,7 @@
 
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 
 using namespace plumage_host;
@@ -183,6 +185,188 @@ void glb_feather_attributes() {
     CHECK(near(moved, kites(3, 1).normals));
 }
 
+void glb_feather_material() {
+    // The feathers' material: double-sided, alpha-masked by a vane texture
+    // the writer draws; read back, the image decodes to its size, clear
+    // outside the vane (a corner) and opaque on the shaft mid-card.
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({10, 11}), kites(2, 0));
+    rec.write_glb(path("material.glb"));
+    const tinygltf::Model m = read_back(path("material.glb"));
+    const int index = m.meshes[1].primitives[0].material;
+    CHECK(index >= 0 && static_cast<size_t>(index) < m.materials.size());
+    if (index < 0 || static_cast<size_t>(index) >= m.materials.size()) return;
+    const tinygltf::Material& mat = m.materials[static_cast<size_t>(index)];
+    CHECK(mat.doubleSided && mat.alphaMode == "MASK" && mat.alphaCutoff > 0.3 && mat.alphaCutoff < 0.7);
+    CHECK(m.meshes[0].primitives[0].material != index);  // the body's is another
+    const int tex = mat.pbrMetallicRoughness.baseColorTexture.index;
+    CHECK(tex >= 0 && static_cast<size_t>(tex) < m.textures.size() && mat.pbrMetallicRoughness.baseColorTexture.texCoord == 0);
+    if (tex < 0 || static_cast<size_t>(tex) >= m.textures.size()) return;
+    const int source = m.textures[static_cast<size_t>(tex)].source;
+    CHECK(source >= 0 && static_cast<size_t>(source) < m.images.size());
+    if (source < 0 || static_cast<size_t>(source) >= m.images.size()) return;
+    const tinygltf::Image& img = m.images[static_cast<size_t>(source)];
+    CHECK(img.width == 128 && img.height == 64 && img.component == 4 && img.bits == 8);
+    CHECK(img.image.size() == 128u * 64u * 4u);
+    if (img.image.size() != 128u * 64u * 4u) return;
+    const auto alpha = [&](double u, double v) {
+        const int x = std::min(127, static_cast<int>(u * 128)), y = std::min(63, static_cast<int>(v * 64));
+        return img.image[(static_cast<size_t>(y) * 128 + static_cast<size_t>(x)) * 4 + 3];
+    };
+    CHECK(alpha(0, 0) == 0 && alpha(1, 1) == 0 && alpha(0, 1) == 0 && alpha(1, 0) == 0);  // corners: outside the vane
+    CHECK(alpha(0.5, 0.5) == 255 && alpha(0.5, 0.3) == 255);                          // mid-card: the shaft and a vane
+    const size_t mid = (32u * 128u + 64u) * 4u, vane = (20u * 128u + 64u) * 4u;
+    CHECK(img.image[mid] < img.image[vane]);  // the shaft is darker than the vane
+    const std::vector<double> brown{0.45, 0.32, 0.2, 1.0};
+    CHECK(mat.pbrMetallicRoughness.baseColorFactor == brown);
+}
+
+void glb_body_material() {
+    // Without an input material the body is the host's grey; with one, its factors and name.
+    AnimationRecorder plain(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    plain.write_glb(path("plain.glb"));
+    const tinygltf::Model a = read_back(path("plain.glb"));
+    const tinygltf::Material& grey = a.materials[static_cast<size_t>(a.meshes[0].primitives[0].material)];
+    CHECK(grey.name == "body" && (grey.pbrMetallicRoughness.baseColorFactor == std::vector<double>{0.78, 0.72, 0.66, 1.0}));
+
+    tinygltf::Model in;
+    in.meshes.resize(1);
+    tinygltf::Primitive points, small, tris;
+    points.mode = TINYGLTF_MODE_POINTS;
+    points.material = 0;  // not a triangle primitive: passed over
+    small.material = 0;   // fewer triangles: passed over
+    small.indices = 0;
+    tris.material = 1;
+    tris.indices = 1;
+    in.accessors.resize(2);
+    in.accessors[0].count = 3;
+    in.accessors[1].count = 30;
+    in.meshes[0].primitives = {points, small, tris};
+    in.materials.resize(2);
+    tinygltf::Material& skin = in.materials[1];
+    skin.name = "skin";
+    skin.pbrMetallicRoughness.baseColorFactor = {0.9, 0.4, 0.5, 1.0};
+    skin.pbrMetallicRoughness.metallicFactor = 0.25;
+    skin.pbrMetallicRoughness.roughnessFactor = 0.6;
+    skin.emissiveFactor = {0.1, 0, 0};
+    skin.doubleSided = true;
+    const std::optional<BodyMaterial> got = input_material(in, 0);
+    CHECK(got.has_value());
+    if (!got) return;
+    CHECK(got->name == "skin" && got->metallic == 0.25 && got->roughness == 0.6 && got->double_sided && got->alpha_mode == "OPAQUE");
+    CHECK((got->base_color == std::array<double, 4>{0.9, 0.4, 0.5, 1.0}) && (got->emissive == std::array<double, 3>{0.1, 0, 0}));
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    rec.set_body_material(*got);
+    rec.write_glb(path("skin.glb"));
+    const tinygltf::Model b = read_back(path("skin.glb"));
+    const tinygltf::Material& out = b.materials[static_cast<size_t>(b.meshes[0].primitives[0].material)];
+    CHECK(out.name == "skin" && out.doubleSided && out.pbrMetallicRoughness.baseColorFactor == skin.pbrMetallicRoughness.baseColorFactor);
+    CHECK(out.pbrMetallicRoughness.metallicFactor == 0.25 && out.pbrMetallicRoughness.roughnessFactor == 0.6 && out.emissiveFactor == skin.emissiveFactor);
+
+    // A textured base colour (not carried over) keeps the host's grey, and the other factors.
+    skin.pbrMetallicRoughness.baseColorTexture.index = 0;
+    const std::optional<BodyMaterial> textured = input_material(in, 0);
+    CHECK(textured && (textured->base_color == BodyMaterial{}.base_color) && textured->roughness == 0.6);
+    skin.pbrMetallicRoughness.baseColorTexture.index = -1;
+
+    // No material, a dangling index, factors out of range, no such mesh: nothing.
+    in.meshes[0].primitives[2].material = -1;
+    CHECK(input_material(in, 0).has_value() && input_material(in, 0)->name == "body");  // the smaller one's (unnamed)
+    in.meshes[0].primitives[1].material = -1;
+    CHECK(!input_material(in, 0).has_value());
+    in.meshes[0].primitives[2].material = 7;
+    CHECK(!input_material(in, 0).has_value());
+    in.meshes[0].primitives[2].material = 1;
+    skin.pbrMetallicRoughness.baseColorFactor = {2, 0, 0, 1};
+    CHECK(!input_material(in, 0).has_value() && !input_material(in, 1).has_value() && !input_material(in, -1).has_value());
+}
+
+// A 2x1 RGBA PNG: a red pixel, then a blue one.
+const std::vector<unsigned char> kPng{
+    0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48, 0x44, 0x52, 0x00, 0x00, 0x00, 0x02,
+    0x00, 0x00, 0x00, 0x01, 0x08, 0x06, 0x00, 0x00, 0x00, 0xf4, 0x22, 0x7f, 0x8a, 0x00, 0x00, 0x00, 0x0e, 0x49, 0x44, 0x41,
+    0x54, 0x78, 0x9c, 0x63, 0xf8, 0xcf, 0xc0, 0x00, 0x42, 0xff, 0x01, 0x0f, 0xf9, 0x03, 0xfd, 0x85, 0x11, 0x99, 0x76, 0x00,
+    0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+
+void glb_body_texture() {
+    // The input's base colour texture (a PNG in a buffer view) is carried
+    // with its sampler, on the body's UVs written as TEXCOORD_0.
+    tinygltf::Model in;
+    in.buffers.resize(1);
+    in.buffers[0].data.assign(8, 0);  // the image does not start the buffer
+    in.buffers[0].data.insert(in.buffers[0].data.end(), kPng.begin(), kPng.end());
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = 8;
+    view.byteLength = kPng.size();
+    in.bufferViews.push_back(view);
+    tinygltf::Image image;
+    image.mimeType = "image/png";
+    image.bufferView = 0;
+    in.images.push_back(image);
+    tinygltf::Sampler sampler;
+    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_NEAREST;
+    sampler.wrapS = TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT;
+    in.samplers.push_back(sampler);
+    tinygltf::Texture texture;
+    texture.source = 0;
+    texture.sampler = 0;
+    in.textures.push_back(texture);
+    tinygltf::Material skin;
+    skin.name = "skin";
+    skin.pbrMetallicRoughness.baseColorFactor = {1, 0.5, 1, 1};
+    skin.pbrMetallicRoughness.baseColorTexture.index = 0;
+    skin.pbrMetallicRoughness.baseColorTexture.texCoord = 1;
+    in.materials.push_back(skin);
+    in.meshes.resize(1);
+    in.meshes[0].primitives.resize(1);
+    in.meshes[0].primitives[0].material = 0;
+
+    std::optional<BodyMaterial> got = input_material(in, 0);
+    CHECK(got && got->base_color_texture && got->base_color_uv_set == 1);
+    if (!got || !got->base_color_texture) return;
+    CHECK(got->base_color_texture->bytes == kPng && got->base_color_texture->mime_type == "image/png");
+    CHECK(got->base_color_texture->mag_filter == TINYGLTF_TEXTURE_FILTER_NEAREST && got->base_color_texture->wrap_s == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT);
+    CHECK((got->base_color == std::array<double, 4>{1, 0.5, 1, 1}));  // carried with its texture, the factor too
+
+    got->uvs = {0, 0, 1, 0, 0, 1};
+    AnimationRecorder rec(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    rec.set_body_material(*got);
+    rec.write_glb(path("textured.glb"));
+    const tinygltf::Model m = read_back(path("textured.glb"));
+    const tinygltf::Primitive& body = m.meshes[0].primitives[0];
+    CHECK(body.attributes.count("TEXCOORD_0") == 1);
+    if (body.attributes.count("TEXCOORD_0") == 1) CHECK((floats(m, body.attributes.at("TEXCOORD_0")) == got->uvs));
+    const tinygltf::Material& out = m.materials[static_cast<size_t>(body.material)];
+    const tinygltf::TextureInfo& info = out.pbrMetallicRoughness.baseColorTexture;
+    CHECK(out.name == "skin" && info.index >= 0 && info.texCoord == 0);
+    if (info.index < 0) return;
+    const tinygltf::Texture& t = m.textures[static_cast<size_t>(info.index)];
+    const tinygltf::Image& decoded = m.images[static_cast<size_t>(t.source)];
+    CHECK(decoded.width == 2 && decoded.height == 1 && decoded.image.size() == 8);
+    if (decoded.image.size() == 8) CHECK(decoded.image[0] == 255 && decoded.image[2] == 0 && decoded.image[4] == 0 && decoded.image[6] == 255);
+    CHECK(m.samplers[static_cast<size_t>(t.sampler)].magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST);
+
+    // Without UVs for every body vertex the texture is dropped: the host's grey, no TEXCOORD_0.
+    got->uvs = {0, 0};
+    AnimationRecorder bare(kBody, kBodyIndices, feathers({1}), kites(1, 0));
+    bare.set_body_material(*got);
+    bare.write_glb(path("untextured.glb"));
+    const tinygltf::Model u = read_back(path("untextured.glb"));
+    const tinygltf::Material& grey = u.materials[static_cast<size_t>(u.meshes[0].primitives[0].material)];
+    CHECK(grey.pbrMetallicRoughness.baseColorTexture.index < 0 && u.meshes[0].primitives[0].attributes.count("TEXCOORD_0") == 0);
+    const std::array<double, 4> host_grey = BodyMaterial{}.base_color;
+    CHECK(grey.pbrMetallicRoughness.baseColorFactor == std::vector<double>(host_grey.begin(), host_grey.end()));
+
+    // An image that is not a PNG or JPEG in a buffer view is not carried, nor one past its buffer.
+    in.images[0].mimeType = "image/webp";
+    got = input_material(in, 0);
+    CHECK(got && !got->base_color_texture && (got->base_color == BodyMaterial{}.base_color));
+    in.images[0].mimeType = "image/png";
+    in.bufferViews[0].byteLength = 1000;
+    got = input_material(in, 0);
+    CHECK(got && !got->base_color_texture);
+}
+
 void glb_feathers_matched_by_id() {
     AnimationRecorder rec(kBody, kBodyIndices, feathers({7, 8, 9}), kites(3, 0));
     // Frame 0 lists the feathers in reverse, plus one the rest pose did not have.
@@ -307,6 +491,9 @@ void report_memory() {
 const std::map<std::string, std::function<void()>> kCases = {
     {"glb_layout_and_frames", glb_layout_and_frames},
     {"glb_feather_attributes", glb_feather_attributes},
+    {"glb_feather_material", glb_feather_material},
+    {"glb_body_material", glb_body_material},
+    {"glb_body_texture", glb_body_texture},
     {"glb_feathers_matched_by_id", glb_feathers_matched_by_id},
     {"glb_rest_only", glb_rest_only},
     {"report_leaves_out_missing_figures", report_leaves_out_missing_figures},
