@@ -425,6 +425,12 @@ typedef struct PlumageConfig {
    * `feather_width` is 0 (default 1.75; scales 2), in (0, 20].
    */
   float width_per_spacing;
+  /**
+   * A feather whose pose relative to its root (pitch, roll, a bend)
+   * changes by more than this between frames counts as a pop in
+   * `PlumageFrameStats.pops` (radians, default 5°; a figure only).
+   */
+  float pop_threshold;
 } PlumageConfig;
 
 /**
@@ -639,6 +645,16 @@ typedef struct PlumageFrameStats {
    * of feathers visited mean the call ran nearly one at a time.
    */
   uint64_t levels;
+  /**
+   * Feathers whose pose relative to their root (pitch, roll, a bend)
+   * changed by more than `PlumageConfig.pop_threshold` in this call
+   * (appended): what an animator sees flick. 0 after create or a load.
+   */
+  uint64_t pops;
+  /**
+   * The largest such change of any feather in this call, degrees.
+   */
+  double largest_pose_change_deg;
 } PlumageFrameStats;
 
 /**

@@ -124,6 +124,11 @@ pub struct Config {
     /// Feather width as a multiple of the local spacing, when
     /// `feather_width` is 0 (default 1.75), in (0, 20].
     pub width_per_spacing: f32,
+    /// A feather whose pose relative to its root (pitch, roll, a bend)
+    /// changes by more than this between frames counts as a pop in the
+    /// frame figures (radians, default 5°). A figure only: it changes no
+    /// result.
+    pub pop_threshold: f32,
 }
 
 /// What a system dresses a surface with: the defaults of [`Config`] for
@@ -171,6 +176,7 @@ impl Default for Config {
             bend_limit: crate::adjustment::DEFAULT_BEND_LIMIT,
             length_per_spacing: crate::feather::LENGTH_PER_SPACING,
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
+            pop_threshold: crate::animation::coherence::DEFAULT_POP_THRESHOLD,
         }
     }
 }
@@ -206,6 +212,7 @@ impl Config {
             ("collision_allowance", self.collision_allowance),
             ("theta_s", self.theta_s),
             ("drift_tolerance", self.drift_tolerance),
+            ("pop_threshold", self.pop_threshold),
         ];
         for (name, v) in finite_nonneg {
             if !v.is_finite() || v < 0.0 {

@@ -2,13 +2,14 @@
 //! feathers' rest binding (the dressing) and their state at the current pose
 //! (the coat), and is what the FFI handle wraps.
 
+use crate::animation::coherence::{PoseChanges, pose_changes};
 use crate::animation::step::{StepWorkspace, step_coat};
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
-use crate::feather::{FeatherMesh, FeatherTriangles, MAX_TRIANGLES, triangles_per_feather};
+use crate::feather::{FeatherMesh, FeatherPose, FeatherTriangles, MAX_TRIANGLES, triangles_per_feather};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
@@ -41,6 +42,9 @@ pub struct System {
     work: Workspace,
     step_work: StepWorkspace,
     frame_positions: Vec<Vec3>,
+    /// The poses before the last step or evaluate, and how they changed.
+    previous_poses: Vec<FeatherPose>,
+    pose_changes: PoseChanges,
     #[cfg(feature = "test-hooks")]
     test_panic: std::sync::atomic::AtomicBool,
 }
@@ -98,6 +102,8 @@ impl System {
             work: Workspace::default(),
             step_work: StepWorkspace::default(),
             frame_positions: Vec::new(),
+            previous_poses: Vec::new(),
+            pose_changes: PoseChanges::default(),
             #[cfg(feature = "test-hooks")]
             test_panic: Default::default(),
         };
@@ -193,6 +199,12 @@ impl System {
     /// What the last create, step or evaluate did.
     pub fn frame_report(&self) -> Option<FrameReport> {
         Some(self.coat.frame_report)
+    }
+
+    /// How the feathers' poses relative to their roots changed in the last
+    /// step or evaluate (none after create or a load): the pops figure.
+    pub fn pose_changes(&self) -> PoseChanges {
+        self.pose_changes
     }
 
     /// Exact validation of the current feathers (DESIGN.md §6).
@@ -291,10 +303,14 @@ impl System {
         update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
+        self.previous_poses.clone_from(&self.coat.poses);
         let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
         let result = update(self, progress);
         match result {
-            Ok(()) => self.export(),
+            Ok(()) => {
+                self.pose_changes = pose_changes(&self.previous_poses, &self.coat.poses, self.config.pop_threshold);
+                self.export()
+            }
             Err(_) => {
                 if let Some((coat, readjusted)) = backup {
                     self.coat = coat;
@@ -351,6 +367,7 @@ impl System {
         reader.finish()?;
         self.coat = coat;
         self.work.adjuster.set_adjusted(&readjusted);
+        self.pose_changes = PoseChanges::default();
         self.export();
         Ok(())
     }
@@ -391,6 +408,7 @@ impl System {
             bend_limit,
             length_per_spacing,
             width_per_spacing,
+            pop_threshold: _,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![

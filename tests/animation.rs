@@ -51,6 +51,8 @@ fn a_rigidly_moving_body_readjusts_nothing() {
         sys.step(&frame).unwrap();
         let report = sys.frame_report().unwrap();
         assert_eq!(report.adjusted, 0, "frame {k}: a rigid motion readjusts no feather");
+        assert_eq!(sys.pose_changes().pops, 0, "frame {k}: a rigid motion pops no feather");
+        assert_eq!(sys.pose_changes().largest, 0.0, "frame {k}: poses relative to the roots are unchanged");
         let v = sys.validate().unwrap();
         assert_eq!(v.intersecting_pairs, rest.intersecting_pairs, "frame {k}");
         assert_eq!(v.body_penetrations, rest.body_penetrations, "frame {k}");
@@ -172,4 +174,22 @@ fn modes_differ_in_what_they_touch() {
         counts.push(r.adjusted);
     }
     println!("adjusted per mode (incremental, legacy, rebuild): {counts:?}");
+}
+
+#[test]
+fn a_bend_pops_what_it_snaps_and_the_figure_follows_the_threshold() {
+    let plate = grid(10.0, 10.0, 40, 40, 0.0, true);
+    let frame = fold(&plate, 3.0, 0.5);
+    let mut changes = Vec::new();
+    for threshold in [0.02f32, 0.2] {
+        let mut sys = create(&plate, &Config { pop_threshold: threshold, ..plate_config(1200) });
+        assert_eq!(sys.pose_changes().pops, 0, "create pops nothing");
+        sys.step(&frame).unwrap();
+        let c = sys.pose_changes();
+        assert!(c.pops <= sys.feather_count() && c.largest >= 0.0);
+        changes.push(c);
+    }
+    // The same step: the same largest change, fewer pops past the higher threshold.
+    assert_eq!(changes[0].largest, changes[1].largest);
+    assert!(changes[0].pops > 0 && changes[0].pops >= changes[1].pops, "{changes:?}");
 }

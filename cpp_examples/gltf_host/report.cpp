@@ -155,6 +155,11 @@ void Report::add_frame(size_t index, double time, double step_seconds, const std
         if (PLUMAGE_FILLED(*s, deformed)) f["deformed"] = s->deformed;
         if (PLUMAGE_FILLED(*s, seeds)) f["seeds"] = s->seeds;
         put_adjustment(f, *s);
+        if (PLUMAGE_FILLED(*s, pops)) {
+            f["pops"] = s->pops;
+            if (feathers_ > 0) put(f, "pops_percent", 100.0 * static_cast<double>(s->pops) / static_cast<double>(feathers_));
+        }
+        if (PLUMAGE_FILLED(*s, largest_pose_change_deg)) put(f, "largest_pose_change_deg", s->largest_pose_change_deg);
         if (PLUMAGE_FILLED(*s, priority_changes)) f["priority_changes"] = s->priority_changes;
         if (PLUMAGE_FILLED(*s, priority_change_percent)) put(f, "priority_change_percent", s->priority_change_percent);
         if (PLUMAGE_FILLED(*s, reversals)) f["reversals"] = s->reversals;
@@ -196,6 +201,8 @@ json Report::summary() const {
     add("max_tip_height_median", "tip_height_median", 2);
     add("max_tip_height_p90", "tip_height_p90", 2);
     add("max_bristle_percent", "bristle_percent", 2);
+    add("mean_pops_percent", "pops_percent", 0);
+    add("max_pops_percent", "pops_percent", 2);
     return s;
 }
 

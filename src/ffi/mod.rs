@@ -551,6 +551,8 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
             verified: r.verified as u64,
             neighbourhood_seconds: r.neighbourhood_seconds,
             levels: r.levels as u64,
+            pops: system.pose_changes().pops as u64,
+            largest_pose_change_deg: f64::from(system.pose_changes().largest).to_degrees(),
         };
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
         unsafe { write_versioned(out, FRAME_STATS_V1_SIZE, value, "PlumageFrameStats") }

@@ -112,6 +112,10 @@ pub struct PlumageConfig {
     /// Feather width as a multiple of the local spacing when
     /// `feather_width` is 0 (default 1.75; scales 2), in (0, 20].
     pub width_per_spacing: f32,
+    /// A feather whose pose relative to its root (pitch, roll, a bend)
+    /// changes by more than this between frames counts as a pop in
+    /// `PlumageFrameStats.pops` (radians, default 5°; a figure only).
+    pub pop_threshold: f32,
 }
 
 /// `plumage_config_init_preset`: contour feathers (the defaults of
@@ -277,6 +281,7 @@ impl PlumageConfig {
             bend_limit: c.bend_limit,
             length_per_spacing: c.length_per_spacing,
             width_per_spacing: c.width_per_spacing,
+            pop_threshold: c.pop_threshold,
         }
     }
 
@@ -315,6 +320,7 @@ impl PlumageConfig {
             self.bend_limit,
             self.length_per_spacing,
             self.width_per_spacing,
+            self.pop_threshold,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -349,6 +355,7 @@ impl PlumageConfig {
             bend_limit: self.bend_limit,
             length_per_spacing: self.length_per_spacing,
             width_per_spacing: self.width_per_spacing,
+            pop_threshold: self.pop_threshold,
         };
         cfg.validate()?;
         Ok(cfg)
@@ -578,6 +585,12 @@ pub struct PlumageFrameStats {
     /// The feathers of a level run in parallel; levels close to the number
     /// of feathers visited mean the call ran nearly one at a time.
     pub levels: u64,
+    /// Feathers whose pose relative to their root (pitch, roll, a bend)
+    /// changed by more than `PlumageConfig.pop_threshold` in this call
+    /// (appended): what an animator sees flick. 0 after create or a load.
+    pub pops: u64,
+    /// The largest such change of any feather in this call, degrees.
+    pub largest_pose_change_deg: f64,
 }
 
 /// Exact validation of the current feathers (`plumage_system_validate`).
@@ -725,6 +738,6 @@ const _: () = {
     assert!(size_of::<PlumageFeather>() == 8 + 4 + 4 + 4 * 3 * 4 + 4 * 5 + 4);
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 17);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 19);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
 };

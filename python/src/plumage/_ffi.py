@@ -65,6 +65,7 @@ class Config(ctypes.Structure):
         ("bend_limit", c_float),
         ("length_per_spacing", c_float),
         ("width_per_spacing", c_float),
+        ("pop_threshold", c_float),
     ]
 
 
@@ -145,6 +146,8 @@ class FrameStats(ctypes.Structure):
         ("verified", c_uint64),
         ("neighbourhood_seconds", ctypes.c_double),
         ("levels", c_uint64),
+        ("pops", c_uint64),
+        ("largest_pose_change_deg", ctypes.c_double),
     ]
 
 

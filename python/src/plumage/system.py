@@ -105,6 +105,8 @@ class FrameStats:
     verified: int
     neighbourhood_seconds: float
     levels: int
+    pops: int
+    largest_pose_change_deg: float
 
 
 @dataclass(frozen=True)
