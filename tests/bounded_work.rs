@@ -14,52 +14,6 @@ fn scaled(shape: &Shape, s: f32) -> Shape {
     Shape { positions: shape.positions.iter().map(|x| x * s).collect(), indices: shape.indices.clone() }
 }
 
-/// Exploration and the README's figures: `PLUMAGE_PROBE=CASE cargo test
-/// --release --test bounded_work probe -- --ignored --nocapture`, CASE one
-/// of target1e6, target1e7, spacing1e-9, spacing1e-3, huge, big, tiny,
-/// tinier, scaleS, offsetO, feathersN.
-#[test]
-#[ignore]
-fn probe() {
-    let case = std::env::var("PLUMAGE_PROBE").unwrap_or_default();
-    let base = cylinder(1.0, 3.0, 24, 12);
-    let diag = (3.0f32 * 3.0 + 2.0 * 2.0 + 2.0 * 2.0).sqrt();
-    let (shape, cfg) = match case.as_str() {
-        "target1e7" => (base, Config { target_feathers: 10_000_000, ..Config::default() }),
-        "target1e6" => (base, Config { target_feathers: 1_000_000, ..Config::default() }),
-        "spacing1e-9" => (base, Config { spacing: 1e-9 * diag, ..Config::default() }),
-        "spacing1e-3" => (base, Config { spacing: 1e-3 * diag, ..Config::default() }),
-        "huge" => (scaled(&base, 1e30), Config { target_feathers: 2000, ..Config::default() }),
-        "big" => (scaled(&base, 1e18), Config { target_feathers: 2000, ..Config::default() }),
-        "tiny" => (scaled(&base, 1e-20), Config { target_feathers: 2000, ..Config::default() }),
-        "tinier" => (scaled(&base, 1e-35), Config { target_feathers: 2000, ..Config::default() }),
-        other if other.starts_with("feathers") => {
-            // A finer cylinder (24 576 triangles) dressed with N feathers.
-            let n: usize = other[8..].parse().unwrap();
-            (cylinder(1.0, 3.0, 128, 96), Config { target_feathers: n, threads: 1, ..Config::default() })
-        }
-        other if other.starts_with("offset") => {
-            let o: f32 = other[6..].parse().unwrap();
-            let mut b = base.clone();
-            b.positions.iter_mut().step_by(3).for_each(|x| *x += o);
-            (b, Config { target_feathers: 2000, ..Config::default() })
-        }
-        other if other.starts_with("scale") => {
-            let s: f32 = other[5..].parse().unwrap();
-            (scaled(&base, s), Config { target_feathers: 2000, ..Config::default() })
-        }
-        other => panic!("unknown case {other}"),
-    };
-    let t = Instant::now();
-    let r = System::new(&cfg, &MeshInput::new(&shape.positions, &shape.indices));
-    eprintln!(
-        "{case}: {:?} in {:.2} s, peak RSS {} KiB",
-        r.as_ref().map(|s| s.feather_count()).map_err(|e| e.to_string()),
-        t.elapsed().as_secs_f64(),
-        common::fuzz::peak_rss_kib()
-    );
-}
-
 fn create(shape: &Shape, cfg: &Config) -> Result<System, plumage::Error> {
     System::new(cfg, &MeshInput::new(&shape.positions, &shape.indices))
 }
