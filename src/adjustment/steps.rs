@@ -30,7 +30,9 @@
 use super::height_field::{GridExtent, JUDGE_FRACTION, LocalMap, ceil_i32, floor_i32};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::{Aabb, BodyIndex};
-use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_JOINTS, MAX_TRIANGLES, feather_triangles};
+use crate::feather::{
+    FeatherPose, FeatherShape, FeatherTriangles, MAX_JOINTS, MAX_SEGMENTS, MAX_TRIANGLES, feather_triangles,
+};
 use crate::geometry::RootFrame;
 use crate::validation::{BoxedTriangles, FeatherBoxes};
 use glam::Vec3;
@@ -118,7 +120,8 @@ pub(crate) fn adjust_feather_boxed(
     if shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
         return straight;
     }
-    AdjustOutcome { pose: drape(frame, shape, straight.pose, boxes, body, params, scratch), ..straight }
+    let draped = drape(frame, shape, straight.pose, boxes, body, params, scratch);
+    AdjustOutcome { pose: draped, ..straight }
 }
 
 /// Angle steps (radians) of the descent of a segment in [`drape`]; the
@@ -127,19 +130,31 @@ pub(crate) fn adjust_feather_boxed(
 const DRAPE_STEP: f32 = 0.1;
 /// Halvings of the last step of a descent.
 const DRAPE_BISECTIONS: usize = 4;
+/// Descents of one drape before it gives up and keeps the straight pose
+/// (each backtrack raises a segment by a [`DRAPE_STEP`]).
+const MAX_DRAPE_DESCENTS: usize = 48;
 
 /// Drapes a segmented feather (DESIGN.md §4, bending). The straight pose
 /// gives the roll and an upper bound on the root segment's pitch (the
 /// whole straight feather is clear there); then segment by segment from
-/// the root, each takes the lowest angle at which it is clear by the
-/// exact checks (the obstacles, their raised tops, and the body), coming
-/// down from above in steps so that it settles on what lies beneath it
-/// rather than passing through to a clear place below. Only the segment
-/// being placed is checked (those before it are placed and do not move; a
-/// later one starts where it ends and finds its own angle). The root segment may come down to the
-/// lowest pitch; every later one turns within the bend limit of the one
-/// before it, up or down. So an obstacle near the root no longer lifts
-/// the whole feather: past it, the feather bends down again.
+/// the root, each takes the lowest angle at which it is clear by the exact
+/// checks (the obstacles, their raised tops, and the body), coming down
+/// from its highest angle in steps so that it settles on what lies beneath
+/// it rather than passing through to a clear place below. Only the segment
+/// being placed is checked (those before it are placed; a later one starts
+/// where it ends). The root segment comes down from the straight pitch
+/// towards the lowest pitch; every later one turns within the bend limit
+/// of the one before it, up or down.
+///
+/// A segment that meets something even at its highest angle (an obstacle
+/// rising steeply ahead of a root segment laid low) sends the drape back:
+/// the segment before it is placed again at least a [`DRAPE_STEP`] higher
+/// than it was, and so on towards the root, which can rise up to the
+/// straight pitch. Without this, about 60 % of the Flamingo's feathers kept
+/// the straight pose because one outer segment could not follow. After
+/// [`MAX_DRAPE_DESCENTS`] descents, or with the root back at the straight
+/// pitch and still no room, the feather keeps its straight pose, which was
+/// clear.
 fn drape(
     frame: &RootFrame,
     shape: &FeatherShape,
@@ -149,32 +164,60 @@ fn drape(
     params: &AdjustParams,
     scratch: &mut HeightField,
 ) -> FeatherPose {
-    let mut pose = straight;
-    let mut hints = CheckHints::default();
     let segments = shape.segment_count();
-    let mut clear = |pose: FeatherPose, segment: usize, scratch: &mut HeightField| {
-        segment_check(frame, shape, pose, segment, boxes, body, scratch, &mut hints)
+    let mut hints = CheckHints::default();
+    // Segment k's angle: the root's pitch for k = 0, else the bend of joint
+    // k − 1 (relative to segment k − 1).
+    let high = |k: usize| if k == 0 { straight.pitch } else { params.bend_limit };
+    let low = |k: usize| if k == 0 { params.min_pitch } else { -params.bend_limit };
+    let set = |pose: &mut FeatherPose, k: usize, angle: f32| {
+        if k == 0 { pose.pitch = angle } else { pose.bends[k - 1] = angle }
     };
-    pose.pitch = descend(straight.pitch, params.min_pitch, |pitch| {
-        let mut lowered = pose;
-        lowered.pitch = pitch;
-        clear(lowered, 0, scratch)
-    })
-    .unwrap_or(straight.pitch);
-    for segment in 1..segments {
-        let joint = segment - 1;
-        let limit = params.bend_limit;
-        let settled = descend(limit, -limit, |bend| {
-            let mut bent = pose;
-            bent.bends[joint] = bend;
-            clear(bent, segment, scratch)
-        });
-        // No angle within the limits clears this segment: the rest of the
-        // feather stays as the straight pose had it, which was clear.
-        let Some(bend) = settled else {
+    let angle = |pose: &FeatherPose, k: usize| if k == 0 { pose.pitch } else { pose.bends[k - 1] };
+    let mut pose = straight;
+    // floor[k]: the lowest angle segment k may take now; raised when a
+    // later segment cannot be placed above what it left.
+    let mut floor = [0.0f32; MAX_SEGMENTS];
+    floor[0] = low(0);
+    let mut k = 0;
+    let mut descents = 0;
+    while k < segments {
+        descents += 1;
+        if descents > MAX_DRAPE_DESCENTS {
             return straight;
-        };
-        pose.bends[joint] = bend;
+        }
+        let settled = descend(high(k), floor[k], |a| {
+            let mut trial = pose;
+            set(&mut trial, k, a);
+            segment_check(frame, shape, trial, k, boxes, body, scratch, &mut hints)
+        });
+        match settled {
+            Some(a) => {
+                set(&mut pose, k, a);
+                k += 1;
+                if k < segments {
+                    floor[k] = low(k);
+                    set(&mut pose, k, 0.0);
+                }
+            }
+            None => {
+                // Even at its highest angle this segment meets something:
+                // raise the segment before it (back to the first that can
+                // still rise).
+                set(&mut pose, k, 0.0);
+                loop {
+                    if k == 0 {
+                        return straight;
+                    }
+                    k -= 1;
+                    if angle(&pose, k) < high(k) {
+                        floor[k] = (angle(&pose, k) + DRAPE_STEP).min(high(k));
+                        break;
+                    }
+                    set(&mut pose, k, 0.0);
+                }
+            }
+        }
     }
     pose
 }
