@@ -851,3 +851,29 @@ fn a_segmented_feather_drapes_over_a_step() {
     assert!(draped < 0.5 * straight, "draped over the edge the tip comes down ({straight} -> {draped})");
     assert!(draped_pose.bends.iter().any(|&b| b < 0.0));
 }
+
+#[test]
+fn a_segmented_feather_climbs_a_steep_ridge_and_drapes_beyond_it() {
+    // A floor at 0 with a ridge rising at 45° just past the first joint (x
+    // = 1.1 to a crest 0.7 high at 1.8, down again at 2.5): a root segment
+    // laid on the floor leaves the next one no room within the bend limit,
+    // so the drape must raise the root segment and then bend down beyond
+    // the crest (before, it kept the straight pose).
+    let profile = [(-4.0f32, 0.0f32), (1.1, 0.0), (1.8, 0.7), (2.5, 0.0), (12.0, 0.0)];
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for pair in profile.windows(2) {
+        let base = pos.len() as u32;
+        for &(x, z) in pair {
+            pos.push(Vec3::new(x, -6.0, z));
+            pos.push(Vec3::new(x, 6.0, z));
+        }
+        tris.push([base, base + 2, base + 3]);
+        tris.push([base, base + 3, base + 1]);
+    }
+    let (_, straight, draped_pose, draped) = drape_over(&pos, &tris, Vec3::ZERO);
+    println!("ridge: tip height straight {straight:.3} L, draped {draped:.3} L, pose {draped_pose:?}");
+    assert!(!draped_pose.is_straight(), "the feather bends beyond the ridge");
+    assert!(draped_pose.bends.iter().any(|&b| b < 0.0), "it bends down beyond the crest: {:?}", draped_pose.bends);
+    assert!(draped < 0.5 * straight, "draped, the tip comes down beyond the ridge ({straight} -> {draped})");
+}

@@ -219,6 +219,14 @@ fn drape(
             }
         }
     }
+    // The segment checks judge each segment alone; the validation judges
+    // the whole feather, and on a skin met edge-on they can differ (a
+    // root segment lying in the skin plane within the contact tolerance,
+    // the next bent off it: the Scales preset on a flat soup). The whole
+    // feather has the last word.
+    if !exact_check(frame, shape, pose, boxes, body, scratch, true, &mut hints) {
+        return straight;
+    }
     pose
 }
 
@@ -268,7 +276,7 @@ fn segment_check(
     hints: &mut CheckHints,
 ) -> bool {
     let all = feather_triangles(frame, shape, pose);
-    let mine = FeatherBoxes::new(&segment_triangles(&all, shape, segment));
+    let mine = FeatherBoxes::of_flat_part(&segment_triangles(&all, shape, segment), frame, shape, pose);
     boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, true, hints)
 }
 
@@ -1502,5 +1510,44 @@ mod tests {
         let exit = cell_threshold(0.0, 10.0, 3.0, 0.0, 3.2);
         assert!((3.0 * (1.0 + exit * exit).sqrt() - 3.2).abs() < 1e-4);
         assert_eq!(cell_threshold(0.0, 0.1, 3.0, 0.0, 3.2), 0.1);
+    }
+
+    #[test]
+    fn every_segment_of_a_bent_rolled_feather_is_flat() {
+        // The plane shortcut of `segment_check` (`FeatherBoxes::of_flat_part`)
+        // is sound only if a segment's triangles lie in one plane.
+        let shape = FeatherShape::for_spacing(1.0).with_segments(4);
+        let frame = RootFrame::from_normal_and_direction(
+            Vec3::new(3.0, -2.0, 50.0),
+            Vec3::new(0.3, 0.2, 1.0).normalize(),
+            Vec3::X,
+        )
+        .unwrap();
+        for (k, &(pitch, roll)) in [(0.3f32, 0.0f32), (-0.2, 0.4), (0.9, -0.5)].iter().enumerate() {
+            let mut pose = FeatherPose::new(pitch, roll);
+            pose.bends[..3].copy_from_slice(&[0.4 - 0.3 * k as f32, -0.4, 0.25]);
+            let all = feather_triangles(&frame, &shape, pose);
+            for segment in 0..4 {
+                let part = segment_triangles(&all, &shape, segment);
+                let margin = posed_margin_for_test(&frame, &shape, pose);
+                let plane = crate::validation::FlatPlane::of_flat_triangles(&part, margin).unwrap();
+                for t in part.iter() {
+                    assert!(
+                        !plane.apart(&[t[0], t[0], t[0]])
+                            && !plane.apart(&[t[1], t[1], t[1]])
+                            && !plane.apart(&[t[2], t[2], t[2]]),
+                        "segment {segment} of {pose:?} is not flat"
+                    );
+                }
+                // A point a tenth of a length off the plane is apart.
+                let n = (part[0][1] - part[0][0]).cross(part[0][2] - part[0][0]).normalize();
+                let off = part[0][0] + n * 0.1 * shape.length;
+                assert!(plane.apart(&[off, off, off]));
+            }
+        }
+    }
+
+    fn posed_margin_for_test(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> f32 {
+        1e-5 * (frame.position.abs().max_element() + shape.length * pose.scale)
     }
 }

@@ -346,6 +346,20 @@ impl FeatherBoxes {
         Self { triangles: FeatherTriangles::from_slice(triangles), prepared, boxes, whole, plane: None }
     }
 
+    /// The boxes of a flat part of a posed feather (one segment of a bent
+    /// shaft, which turns only at its joints): its plane rules triangles
+    /// out as in [`FeatherBoxes::of_feather`], with the same answers as
+    /// [`FeatherBoxes::new`].
+    pub(crate) fn of_flat_part(
+        triangles: &[[Vec3; 3]],
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        pose: FeatherPose,
+    ) -> Self {
+        let plane = FlatPlane::of_flat_triangles(triangles, posed_margin(frame, shape, pose));
+        Self { plane, ..Self::new(triangles) }
+    }
+
     /// The boxes of a feather at a pose, knowing the plane a straight
     /// feather lies in (triangles wholly on one side of it are ruled out
     /// without the exact test): the same answers as [`FeatherBoxes::new`].
@@ -429,6 +443,17 @@ impl FlatPlane {
     /// segments lie in planes of their own).
     pub(crate) fn of_straight_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Option<Self> {
         pose.is_straight().then(|| Self::of_feather(frame, shape, pose))
+    }
+
+    /// The plane of triangles known to lie in one (a segment of a bent
+    /// feather), from the largest of them; `None` if all are degenerate.
+    pub(crate) fn of_flat_triangles(triangles: &[[Vec3; 3]], margin: f32) -> Option<Self> {
+        let (cross, corner) = triangles
+            .iter()
+            .map(|t| ((t[1] - t[0]).cross(t[2] - t[0]), t[0]))
+            .max_by(|a, b| a.0.length_squared().total_cmp(&b.0.length_squared()))?;
+        let normal = cross.try_normalize()?;
+        Some(Self { normal, offset: normal.dot(corner), margin })
     }
 
     /// Whether triangle `t` lies wholly on one side, beyond the margin.
