@@ -630,6 +630,33 @@ pub struct PlumageValidation {
     pub bristle_percent: f64,
 }
 
+/// Figures of the last create, step or evaluate restricted to a part of the
+/// mesh, a range of the caller's triangles (`plumage_system_part_stats`):
+/// the feathers rooted there. A host that dresses several meshes as one
+/// system (their triangles one after the other) reads each mesh's figures
+/// so. Fill with `plumage_part_stats_init` (or set `struct_size =
+/// sizeof(PlumagePartStats)`) before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumagePartStats {
+    /// Set by the caller to `sizeof(PlumagePartStats)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Padding; always 0.
+    pub reserved: u32,
+    /// Feathers rooted on the part's triangles.
+    pub feathers: u64,
+    /// Of those, feathers placed (not left out, collapsed to their root).
+    pub placed: u64,
+    /// Of those, feathers the last create, step or evaluate readjusted.
+    pub adjusted: u64,
+    /// Of those, feathers whose pose relative to their root changed by
+    /// more than `PlumageConfig.pop_threshold` in the last step or
+    /// evaluate (0 after create or a load), as `PlumageFrameStats.pops`.
+    pub pops: u64,
+    /// The largest such change among them, degrees.
+    pub largest_pose_change_deg: f64,
+}
+
 /// Caller buffers for `plumage_system_feather_geometry`: every feather as a
 /// mesh. Fill with `plumage_feather_geometry_init`, then point the buffers
 /// you want at your memory (NULL skips one); capacities count elements
@@ -740,4 +767,5 @@ const _: () = {
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 19);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
+    assert!(size_of::<PlumagePartStats>() == 4 + 4 + 8 * 5);
 };
