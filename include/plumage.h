@@ -266,6 +266,38 @@ typedef struct PlumageSystem PlumageSystem;
 typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
 /**
+ * One task of a parallel section, handed to the host's parallel-for:
+ * call it once with each index in `0 .. count` and the `task_context` that
+ * came with it. It never unwinds or throws into the host (a panic inside
+ * is caught by the library and reported by the call that started the
+ * work, as PLUMAGE_STATUS_PANIC).
+ */
+typedef void (*PlumageTaskFn)(void *task_context, uint32_t index);
+
+/**
+ * A host's parallel-for (`PlumageConfig.parallel_for`): must call
+ * `task(task_context, i)` exactly once for every `i` in `0 .. count`, on
+ * any of its threads (the calling thread included) and in any order,
+ * several at once or one after the other, and return only after every
+ * call has returned. The library calls it from inside its own calls
+ * (create, step, evaluate, validate, load_state, ...) on the thread that
+ * made them; from several threads at once only when the host makes
+ * read-only calls on one system concurrently, or uses it for several
+ * systems on several threads at once. A task may block until
+ * the others finish the work, but never waits for another task to start,
+ * so a host that runs fewer tasks at once than `count` is fine. Progress
+ * callbacks then come from the calling thread or from any thread running
+ * a task, still never two at once. A task run on a thread that is itself
+ * inside one of the library's own worker pools does nothing, and the
+ * library runs its share on the calling thread after `parallel_for`
+ * returns.
+ */
+typedef void (*PlumageParallelForFn)(void *host_context,
+                                     uint32_t count,
+                                     PlumageTaskFn task,
+                                     void *task_context);
+
+/**
  * Parameters of a system. Fill with `plumage_config_init`, then change what
  * you need. Lengths are in model units; a length of 0 means "derive it".
  * Fields are only ever appended; `struct_size` tells the library which ones
@@ -431,6 +463,20 @@ typedef struct PlumageConfig {
    * `PlumageFrameStats.pops` (radians, default 5°; a figure only).
    */
   float pop_threshold;
+  /**
+   * Optional: the host's own parallel-for (TBB, a DCC's thread pool),
+   * through which the system runs all its parallel work instead of
+   * starting threads (NULL, the default: the library's own workers, see
+   * `threads`). See `PlumageParallelForFn` for the contract. With
+   * `threads` N ≥ 2 every call asks for N tasks (0 = one per core); with
+   * `threads` = 1 the work runs on the calling thread and this is never
+   * called. Results are byte-identical to the library's own threads.
+   */
+  PlumageParallelForFn parallel_for;
+  /**
+   * Passed back to `parallel_for` unchanged as `host_context`.
+   */
+  void *parallel_for_context;
 } PlumageConfig;
 
 /**

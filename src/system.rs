@@ -59,11 +59,26 @@ impl System {
     /// As [`System::new`], reporting to `progress`, which may stop it (then
     /// nothing is created).
     pub fn new_with_progress(config: &Config, mesh: &MeshInput<'_>, progress: &Progress) -> Result<Self> {
+        Self::new_with_parallel_for(config, mesh, progress, None)
+    }
+
+    /// As [`System::new_with_progress`]; with `parallel_for`, every parallel
+    /// section of this system runs through the host's parallel-for,
+    /// `config.threads` tasks at a time (see [`crate::pool`]).
+    pub fn new_with_parallel_for(
+        config: &Config,
+        mesh: &MeshInput<'_>,
+        progress: &Progress,
+        parallel_for: Option<std::sync::Arc<dyn crate::pool::ParallelFor>>,
+    ) -> Result<Self> {
         config.validate()?;
         progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
-        let pool = WorkerPool::new(config.threads)?;
+        let pool = match parallel_for {
+            Some(host) => WorkerPool::with_parallel_for(config.threads, host)?,
+            None => WorkerPool::new(config.threads)?,
+        };
         let surface = Surface::new(&welded);
         let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
         let fields = Fields::new(

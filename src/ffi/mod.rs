@@ -192,13 +192,13 @@ pub unsafe extern "C" fn plumage_system_create(
         // SAFETY: non-NULL out (contract: points to a PlumageSystem*).
         unsafe { *out = std::ptr::null_mut() };
         // SAFETY: forwarded pointer contracts of this function.
-        let (config, host_progress) = unsafe { types::read_config(cfg) }?;
+        let types::HostConfig { config, progress: host_progress, parallel_for } = unsafe { types::read_config(cfg) }?;
         let mesh = unsafe { types::read_mesh(rest) }?;
         let progress = match &host_progress {
             Some(p) => crate::progress::Progress::to(p),
             None => crate::progress::Progress::none(),
         };
-        let system = crate::System::new_with_progress(&config, &mesh, &progress)?;
+        let system = crate::System::new_with_parallel_for(&config, &mesh, &progress, parallel_for)?;
         let handle = Box::into_raw(Box::new(PlumageSystem::new(system, host_progress)));
         // SAFETY: as above.
         unsafe { *out = handle };
