@@ -266,6 +266,38 @@ typedef struct PlumageSystem PlumageSystem;
 typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
 /**
+ * One task of a parallel section, handed to the host's parallel-for:
+ * call it once with each index in `0 .. count` and the `task_context` that
+ * came with it. It never unwinds or throws into the host (a panic inside
+ * is caught by the library and reported by the call that started the
+ * work, as PLUMAGE_STATUS_PANIC).
+ */
+typedef void (*PlumageTaskFn)(void *task_context, uint32_t index);
+
+/**
+ * A host's parallel-for (`PlumageConfig.parallel_for`): must call
+ * `task(task_context, i)` exactly once for every `i` in `0 .. count`, on
+ * any of its threads (the calling thread included) and in any order,
+ * several at once or one after the other, and return only after every
+ * call has returned. The library calls it from inside its own calls
+ * (create, step, evaluate, validate, load_state, ...) on the thread that
+ * made them; from several threads at once only when the host makes
+ * read-only calls on one system concurrently, or uses it for several
+ * systems on several threads at once. A task may block until
+ * the others finish the work, but never waits for another task to start,
+ * so a host that runs fewer tasks at once than `count` is fine. Progress
+ * callbacks then come from the calling thread or from any thread running
+ * a task, still never two at once. A task run on a thread that is itself
+ * inside one of the library's own worker pools does nothing, and the
+ * library runs its share on the calling thread after `parallel_for`
+ * returns.
+ */
+typedef void (*PlumageParallelForFn)(void *host_context,
+                                     uint32_t count,
+                                     PlumageTaskFn task,
+                                     void *task_context);
+
+/**
  * Parameters of a system. Fill with `plumage_config_init`, then change what
  * you need. Lengths are in model units; a length of 0 means "derive it".
  * Fields are only ever appended; `struct_size` tells the library which ones
@@ -431,6 +463,20 @@ typedef struct PlumageConfig {
    * `PlumageFrameStats.pops` (radians, default 5°; a figure only).
    */
   float pop_threshold;
+  /**
+   * Optional: the host's own parallel-for (TBB, a DCC's thread pool),
+   * through which the system runs all its parallel work instead of
+   * starting threads (NULL, the default: the library's own workers, see
+   * `threads`). See `PlumageParallelForFn` for the contract. With
+   * `threads` N ≥ 2 every call asks for N tasks (0 = one per core); with
+   * `threads` = 1 the work runs on the calling thread and this is never
+   * called. Results are byte-identical to the library's own threads.
+   */
+  PlumageParallelForFn parallel_for;
+  /**
+   * Passed back to `parallel_for` unchanged as `host_context`.
+   */
+  void *parallel_for_context;
 } PlumageConfig;
 
 /**
@@ -717,6 +763,47 @@ typedef struct PlumageValidation {
 } PlumageValidation;
 
 /**
+ * Figures of the last create, step or evaluate restricted to a part of the
+ * mesh, a range of the caller's triangles (`plumage_system_part_stats`):
+ * the feathers rooted there. A host that dresses several meshes as one
+ * system (their triangles one after the other) reads each mesh's figures
+ * so. Fill with `plumage_part_stats_init` (or set `struct_size =
+ * sizeof(PlumagePartStats)`) before the call.
+ */
+typedef struct PlumagePartStats {
+  /**
+   * Set by the caller to `sizeof(PlumagePartStats)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Padding; always 0.
+   */
+  uint32_t reserved;
+  /**
+   * Feathers rooted on the part's triangles.
+   */
+  uint64_t feathers;
+  /**
+   * Of those, feathers placed (not left out, collapsed to their root).
+   */
+  uint64_t placed;
+  /**
+   * Of those, feathers the last create, step or evaluate readjusted.
+   */
+  uint64_t adjusted;
+  /**
+   * Of those, feathers whose pose relative to their root changed by
+   * more than `PlumageConfig.pop_threshold` in the last step or
+   * evaluate (0 after create or a load), as `PlumageFrameStats.pops`.
+   */
+  uint64_t pops;
+  /**
+   * The largest such change among them, degrees.
+   */
+  double largest_pose_change_deg;
+} PlumagePartStats;
+
+/**
  * One feather, copied out by `plumage_system_feathers`.
  */
 typedef struct PlumageFeather {
@@ -966,6 +1053,15 @@ void plumage_frame_stats_init(struct PlumageFrameStats *out);
 void plumage_validation_init(struct PlumageValidation *out);
 
 /**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumagePartStats)`, ready for
+ * `plumage_system_part_stats`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumagePartStats`.
+ */
+void plumage_part_stats_init(struct PlumagePartStats *out);
+
+/**
  * Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).
  * On success `*out` receives the new system; on any error `*out` is set to
  * NULL (when `out` is not NULL) and the message is available from
@@ -1155,6 +1251,46 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
  * bytes are writable.
  */
 uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct PlumageValidation *out);
+
+/**
+ * `plumage_system_validate` restricted to a part of the mesh: the
+ * caller's triangles `first_triangle .. first_triangle + triangle_count`
+ * of the rest mesh given to create (e.g. one of several meshes a host
+ * dresses as one system, their triangles one after the other). Every
+ * feather still counts as an obstacle and as a cover: `intersecting_pairs`
+ * counts the pairs with at least one feather rooted on the part (so a
+ * pair across two parts counts in both); `body_penetrations`,
+ * `mean_pitch_deg` and the tip heights are those of the part's feathers;
+ * the coverage probes are drawn on the part's skin (as many per feather as
+ * the whole validation draws). Only reads the system.
+ * PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's
+ * triangles; PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ *
+ * # Safety
+ * As `plumage_system_validate`.
+ */
+uint32_t plumage_system_validate_part(const struct PlumageSystem *sys,
+                                      size_t first_triangle,
+                                      size_t triangle_count,
+                                      struct PlumageValidation *out);
+
+/**
+ * The last create, step or evaluate's figures for the feathers rooted on
+ * the caller's triangles `first_triangle .. first_triangle +
+ * triangle_count` (see `PlumagePartStats`). Only reads the system.
+ * PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's
+ * triangles.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
+ */
+uint32_t plumage_system_part_stats(const struct PlumageSystem *sys,
+                                   size_t first_triangle,
+                                   size_t triangle_count,
+                                   struct PlumagePartStats *out);
 
 /**
  * Saves the current frame (what the last successful create, step,

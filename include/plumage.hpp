@@ -266,6 +266,21 @@ public:
     PlumageFrameStats frame_stats() const { return fill(plumage_frame_stats_init, plumage_system_frame_stats); }
     /// plumage_system_validate: the exact checks on the current feathers.
     PlumageValidation validate() const { return fill(plumage_validation_init, plumage_system_validate); }
+    /// plumage_system_part_stats and plumage_system_validate_part: the figures
+    /// of the feathers rooted on the triangles first .. first + count (one of
+    /// several meshes dressed as one system).
+    PlumagePartStats part_stats(size_t first_triangle, size_t triangle_count) const {
+        PlumagePartStats out;
+        plumage_part_stats_init(&out);
+        detail::check(plumage_system_part_stats(sys_, first_triangle, triangle_count, &out), sys_);
+        return out;
+    }
+    PlumageValidation validate_part(size_t first_triangle, size_t triangle_count) const {
+        PlumageValidation out;
+        plumage_validation_init(&out);
+        detail::check(plumage_system_validate_part(sys_, first_triangle, triangle_count, &out), sys_);
+        return out;
+    }
 
     /// plumage_system_save_state: the current frame as a blob.
     std::vector<uint8_t> save_state() const {

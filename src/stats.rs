@@ -93,6 +93,24 @@ impl FrameReport {
     }
 }
 
+/// Figures of the last create, step or evaluate restricted to a part of the
+/// mesh (a range of the caller's triangles): its feathers are those rooted
+/// there. Several meshes dressed as one system read their own figures so.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PartReport {
+    /// Feathers rooted on the part.
+    pub feathers: usize,
+    /// Of those, feathers placed (not left out at their root).
+    pub placed: usize,
+    /// Of those, feathers the last create, step or evaluate readjusted.
+    pub adjusted: usize,
+    /// Of those, feathers whose pose relative to the root changed by more
+    /// than `Config::pop_threshold` in the last step or evaluate.
+    pub pops: usize,
+    /// The largest such change among them, radians.
+    pub largest_pose_change: f32,
+}
+
 /// Exact validation of the current feathers (DESIGN.md §6).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ValidationReport {

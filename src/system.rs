@@ -2,7 +2,7 @@
 //! feathers' rest binding (the dressing) and their state at the current pose
 //! (the coat), and is what the FFI handle wraps.
 
-use crate::animation::coherence::{PoseChanges, pose_changes};
+use crate::animation::coherence::{PoseChanges, pose_change, pose_changes};
 use crate::animation::step::{StepWorkspace, step_coat};
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::config::SamplerKind;
@@ -17,9 +17,9 @@ use crate::progress::{Phase, Progress};
 use crate::rng::hash64;
 use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
-use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
+use crate::stats::{FeatherRecord, FrameReport, OrderingReport, PartReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
-use crate::validation::{ProbeSkin, validate};
+use crate::validation::{ProbeSkin, Validation, validate, validate_part};
 use glam::Vec3;
 
 /// Probes per feather for the coverage figure of [`System::validate`].
@@ -59,11 +59,26 @@ impl System {
     /// As [`System::new`], reporting to `progress`, which may stop it (then
     /// nothing is created).
     pub fn new_with_progress(config: &Config, mesh: &MeshInput<'_>, progress: &Progress) -> Result<Self> {
+        Self::new_with_parallel_for(config, mesh, progress, None)
+    }
+
+    /// As [`System::new_with_progress`]; with `parallel_for`, every parallel
+    /// section of this system runs through the host's parallel-for,
+    /// `config.threads` tasks at a time (see [`crate::pool`]).
+    pub fn new_with_parallel_for(
+        config: &Config,
+        mesh: &MeshInput<'_>,
+        progress: &Progress,
+        parallel_for: Option<std::sync::Arc<dyn crate::pool::ParallelFor>>,
+    ) -> Result<Self> {
         config.validate()?;
         progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
-        let pool = WorkerPool::new(config.threads)?;
+        let pool = match parallel_for {
+            Some(host) => WorkerPool::with_parallel_for(config.threads, host)?,
+            None => WorkerPool::new(config.threads)?,
+        };
         let surface = Surface::new(&welded);
         let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
         let fields = Fields::new(
@@ -157,6 +172,12 @@ impl System {
         self.pool.threads()
     }
 
+    /// Number of triangles of the caller's rest mesh (degenerate and
+    /// duplicate ones included).
+    pub fn caller_triangle_count(&self) -> usize {
+        self.mesh.triangles.len() + self.mesh.degenerate_triangles + self.mesh.duplicate_triangles
+    }
+
     /// Number of feathers.
     pub fn feather_count(&self) -> usize {
         self.records.len()
@@ -211,21 +232,7 @@ impl System {
     pub fn validate(&self) -> Option<ValidationReport> {
         self.maybe_test_panic();
         let n = self.dressing.len();
-        let probes = (COVERAGE_PROBES_PER_FEATHER * n).clamp(COVERAGE_PROBES_MIN, COVERAGE_PROBES_MAX);
-        let mut corners = self.triangles.iter().map(|&p| Vec3::from_array(p));
-        let tris: Vec<FeatherTriangles> = self
-            .dressing
-            .shapes
-            .iter()
-            .map(|shape| {
-                let mut t = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
-                let n = triangles_per_feather(shape);
-                for triangle in &mut t[..n] {
-                    *triangle = std::array::from_fn(|_| corners.next().unwrap_or(Vec3::NAN));
-                }
-                FeatherTriangles::from_slice(&t[..n])
-            })
-            .collect();
+        let tris = self.feather_triangle_sets();
         let c = &self.coat;
         let v = self.pool.install(|| {
             validate(
@@ -239,21 +246,81 @@ impl System {
                     triangles: &self.dressing.triangles,
                     feathered: &self.dressing.feathered,
                 },
-                probes,
+                coverage_probes(n),
                 self.config.seed,
             )
         });
-        Some(ValidationReport {
-            intersecting_pairs: v.intersecting_pairs.len(),
-            body_penetrations: v.body_penetrations.len(),
-            coverage: v.coverage,
-            probes: v.probes,
-            buried_probes: v.buried_probes,
-            mean_pitch_deg: v.mean_pitch_deg,
-            tip_height_median: v.tip_heights.median,
-            tip_height_p90: v.tip_heights.p90,
-            bristle_percent: v.tip_heights.bristle_percent,
-        })
+        Some(validation_report(&v))
+    }
+
+    /// [`System::validate`] restricted to the part of the mesh made of the
+    /// caller's triangles `triangles` (e.g. one of several meshes dressed as
+    /// one system): the pairs with at least one of its feathers (every other
+    /// feather counts as an obstacle), its feathers' body penetrations, pitch
+    /// and tip heights, and coverage probes drawn on its skin (covered by
+    /// any feather), as many per feather as the whole validation draws.
+    pub fn validate_part(&self, triangles: std::ops::Range<u32>) -> Option<ValidationReport> {
+        self.maybe_test_panic();
+        let member: Vec<bool> = self.records.iter().map(|r| triangles.contains(&r.triangle)).collect();
+        let members = member.iter().filter(|&&m| m).count();
+        let skin: Vec<[u32; 3]> = (self.dressing.triangles.iter().zip(&self.dressing.source_triangle))
+            .filter(|&(_, s)| triangles.contains(s))
+            .map(|(&t, _)| t)
+            .collect();
+        let tris = self.feather_triangle_sets();
+        let c = &self.coat;
+        let v = self.pool.install(|| {
+            validate_part(
+                &tris,
+                &c.frames,
+                &self.dressing.shapes,
+                &c.poses,
+                &c.body,
+                &ProbeSkin { positions: &c.positions, triangles: &skin, feathered: &self.dressing.feathered },
+                coverage_probes(members),
+                self.config.seed,
+                &member,
+            )
+        });
+        Some(validation_report(&v))
+    }
+
+    /// The last create, step or evaluate's figures restricted to the
+    /// feathers rooted on the caller's triangles `triangles`.
+    pub fn part_report(&self, triangles: std::ops::Range<u32>) -> PartReport {
+        let readjusted = self.readjusted();
+        let mut r = PartReport::default();
+        for (i, record) in self.records.iter().enumerate() {
+            if !triangles.contains(&record.triangle) {
+                continue;
+            }
+            r.feathers += 1;
+            r.placed += usize::from(record.length > 0.0);
+            r.adjusted += usize::from(readjusted.get(i).copied().unwrap_or(false));
+            if let (Some(before), Some(after)) = (self.previous_poses.get(i), self.coat.poses.get(i)) {
+                let change = pose_change(before, after);
+                r.pops += usize::from(change > self.config.pop_threshold);
+                r.largest_pose_change = r.largest_pose_change.max(change);
+            }
+        }
+        r
+    }
+
+    /// Each feather's triangles at the current pose, as the validation takes them.
+    fn feather_triangle_sets(&self) -> Vec<FeatherTriangles> {
+        let mut corners = self.triangles.iter().map(|&p| Vec3::from_array(p));
+        self.dressing
+            .shapes
+            .iter()
+            .map(|shape| {
+                let mut t = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
+                let n = triangles_per_feather(shape);
+                for triangle in &mut t[..n] {
+                    *triangle = std::array::from_fn(|_| corners.next().unwrap_or(Vec3::NAN));
+                }
+                FeatherTriangles::from_slice(&t[..n])
+            })
+            .collect()
     }
 
     /// Advances to the next animation frame by the system's mode. On error
@@ -303,7 +370,7 @@ impl System {
         update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
-        self.previous_poses.clone_from(&self.coat.poses);
+        let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
         let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
         let result = update(self, progress);
         match result {
@@ -312,6 +379,7 @@ impl System {
                 self.export()
             }
             Err(_) => {
+                self.previous_poses = older_poses;
                 if let Some((coat, readjusted)) = backup {
                     self.coat = coat;
                     self.work.adjuster.set_adjusted(&readjusted);
@@ -368,6 +436,7 @@ impl System {
         self.coat = coat;
         self.work.adjuster.set_adjusted(&readjusted);
         self.pose_changes = PoseChanges::default();
+        self.previous_poses.clear();
         self.export();
         Ok(())
     }
@@ -473,5 +542,24 @@ impl System {
             words.push(u64::from(shape.segments));
         }
         hash64(&words)
+    }
+}
+
+/// Coverage probes for a validation of `feathers` feathers.
+fn coverage_probes(feathers: usize) -> usize {
+    (COVERAGE_PROBES_PER_FEATHER * feathers).clamp(COVERAGE_PROBES_MIN, COVERAGE_PROBES_MAX)
+}
+
+fn validation_report(v: &Validation) -> ValidationReport {
+    ValidationReport {
+        intersecting_pairs: v.intersecting_pairs.len(),
+        body_penetrations: v.body_penetrations.len(),
+        coverage: v.coverage,
+        probes: v.probes,
+        buried_probes: v.buried_probes,
+        mean_pitch_deg: v.mean_pitch_deg,
+        tip_height_median: v.tip_heights.median,
+        tip_height_p90: v.tip_heights.p90,
+        bristle_percent: v.tip_heights.bristle_percent,
     }
 }

@@ -57,6 +57,10 @@ int main() try {
     expect(n >= 50, "at least 50 feathers");
     expect(val.intersecting_pairs == 0, "0 intersecting pairs after a step");
     expect(sys.frame_stats().frame_index == 1, "frame index 1 after one step");
+    expect(sys.part_stats(0, SPHERE_TRIANGLES).feathers == n, "the part of every triangle holds every feather");
+    expect(sys.validate_part(0, SPHERE_TRIANGLES).intersecting_pairs == 0, "a part's validation");
+    expect(status_of([&] { sys.part_stats(1, SPHERE_TRIANGLES); }) == PLUMAGE_STATUS_INDEX_OUT_OF_RANGE,
+           "a part past the triangles throws INDEX_OUT_OF_RANGE");
 
     const std::vector<PlumageFeather> feathers = sys.feathers();
     expect(feathers.size() == n, "one PlumageFeather per feather");

@@ -151,9 +151,43 @@ void require_finite(const std::vector<double>& values, const std::string& what) 
 
 }  // namespace
 
+std::vector<int> choose_meshes(const tinygltf::Model& model, const std::vector<std::string>& requests) {
+    if (requests.empty()) return {choose_mesh(model, "")};
+    std::vector<int> chosen;
+    if (requests.size() == 1 && requests[0] == "all") {
+        for (size_t i = 0; i < model.meshes.size(); ++i) {
+            if (mesh_triangles(model, model.meshes[i]) > 0 && mesh_is_animated(model, static_cast<int>(i))) chosen.push_back(static_cast<int>(i));
+        }
+        if (chosen.empty()) {
+            std::vector<std::string> names;
+            for (const tinygltf::Mesh& m : model.meshes) names.push_back(m.name);
+            throw UsageError("--mesh all: no skinned or morphed triangle mesh (meshes: " + list_names(names) + ")");
+        }
+        return chosen;
+    }
+    for (const std::string& r : requests) {
+        if (r == "all") throw UsageError("--mesh all dresses every skinned or morphed mesh: give it alone, not with other --mesh options");
+        const int m = choose_mesh(model, r);
+        if (std::find(chosen.begin(), chosen.end(), m) != chosen.end()) throw UsageError("--mesh " + r + ": mesh " + std::to_string(m) + " is already chosen");
+        chosen.push_back(m);
+    }
+    return chosen;
+}
+
 GltfScene::GltfScene(const tinygltf::Model& model, const std::string& mesh_request, const std::string& clip_request) {
     load_hierarchy(model);
     mesh_index_ = choose_mesh(model, mesh_request);
+    init(model, clip_request);
+}
+
+GltfScene::GltfScene(const tinygltf::Model& model, int mesh_index, const std::string& clip_request) {
+    load_hierarchy(model);
+    if (mesh_index < 0 || static_cast<size_t>(mesh_index) >= model.meshes.size()) throw UsageError("mesh " + std::to_string(mesh_index) + " does not exist");
+    mesh_index_ = mesh_index;
+    init(model, clip_request);
+}
+
+void GltfScene::init(const tinygltf::Model& model, const std::string& clip_request) {
     mesh_name_ = model.meshes[static_cast<size_t>(mesh_index_)].name;
     if (mesh_name_.empty()) mesh_name_ = "mesh " + std::to_string(mesh_index_);
     instance_node_ = find_instance_node(model, mesh_index_, node_order_);

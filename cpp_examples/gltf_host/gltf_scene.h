@@ -16,6 +16,13 @@ class Model;
 
 namespace plumage_host {
 
+// The meshes the --mesh options name, in their order: none = the default
+// mesh (the largest skinned or morphed one, else the largest); "all" alone =
+// every skinned or morphed mesh with triangles, by index; else each by name
+// or index. Throws UsageError for a mesh that does not exist, one named
+// twice, "all" with others or without any deforming mesh.
+std::vector<int> choose_meshes(const tinygltf::Model& model, const std::vector<std::string>& requests);
+
 class GltfScene final : public AnimatedMesh {
 public:
     // Picks the mesh named (or numbered) `mesh_request`, else the largest
@@ -24,6 +31,8 @@ public:
     // UsageError for a mesh or clip that does not exist, InputError for
     // content the host cannot read.
     GltfScene(const tinygltf::Model& model, const std::string& mesh_request, const std::string& clip_request);
+    // Mesh `mesh_index` (one of choose_meshes' answers).
+    GltfScene(const tinygltf::Model& model, int mesh_index, const std::string& clip_request);
 
     std::string mesh_name() const override { return mesh_name_; }
     const std::vector<float>& rest_positions() const override { return rest_positions_; }
@@ -59,6 +68,7 @@ private:
         double weight = 0;
     };
 
+    void init(const tinygltf::Model& model, const std::string& clip_request);
     void load_hierarchy(const tinygltf::Model& model);
     void load_mesh(const tinygltf::Model& model);
     void load_primitive(const tinygltf::Model& model, size_t primitive, size_t target_count);

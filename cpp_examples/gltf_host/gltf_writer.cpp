@@ -391,6 +391,7 @@ AnimationRecorder::AnimationRecorder(std::vector<float> body_rest, std::vector<u
         first_vertex_.push_back(first);
         first += feather_rest_.vertex_counts[i];
         if (i < feathers.size()) slot_of_id_.emplace(feathers[i].id, i);
+        rest_triangle_.push_back(i < feathers.size() ? feathers[i].triangle : UINT32_MAX);
     }
 }
 
@@ -424,23 +425,97 @@ void AnimationRecorder::add_frame(double seconds, const std::vector<float>& body
     normal_frames_.push_back(std::move(normals));
 }
 
-void AnimationRecorder::write_glb(const std::string& path) const {
-    GlbBuilder b;
-    AnimatedAttributes body{body_rest_, body_frames_};
-    BodyMaterial material = body_material_;
-    if (material.base_color_texture && material.uvs.size() / 2 == body_rest_.size() / 3 && material.uvs.size() % 2 == 0) {
-        body.uvs = &material.uvs;
-    } else if (material.base_color_texture) {
+namespace {
+
+// `material` with its base colour texture only when it has a UV per body vertex.
+BodyMaterial usable_material(BodyMaterial material, size_t body_vertices) {
+    if (material.base_color_texture && !(material.uvs.size() / 2 == body_vertices && material.uvs.size() % 2 == 0)) {
         material.base_color_texture.reset();  // no UVs for it: the host's grey
         material.base_color = BodyMaterial{}.base_color;
     }
-    std::vector<int> nodes{add_animated_mesh(b, "body", body, body_indices_, body_material(b, material))};
-    if (!feather_rest_.positions.empty()) {
-        std::vector<float> ids;
-        ids.reserve(feather_rest_.positions.size() / 3);
-        for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) ids.insert(ids.end(), feather_rest_.vertex_counts[f], static_cast<float>(f));
-        const AnimatedAttributes feathers{feather_rest_.positions, feather_frames_, &feather_rest_.normals, &normal_frames_, &feather_rest_.uvs, &ids};
-        nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, feather_material(b)));
+    return material;
+}
+
+// xyz (or uv) values `first .. first + count` of each frame.
+std::vector<std::vector<float>> slice_frames(const std::vector<std::vector<float>>& frames, size_t first, size_t count) {
+    std::vector<std::vector<float>> out;
+    for (const std::vector<float>& f : frames) out.emplace_back(f.begin() + static_cast<long>(first), f.begin() + static_cast<long>(first + count));
+    return out;
+}
+
+}  // namespace
+
+void AnimationRecorder::write_glb(const std::string& path) const {
+    GlbBuilder b;
+    std::vector<int> nodes;
+    if (parts_.empty()) {
+        AnimatedAttributes body{body_rest_, body_frames_};
+        const BodyMaterial material = usable_material(body_material_, body_rest_.size() / 3);
+        if (material.base_color_texture) body.uvs = &material.uvs;
+        nodes.push_back(add_animated_mesh(b, "body", body, body_indices_, body_material(b, material)));
+        if (!feather_rest_.positions.empty()) {
+            std::vector<float> ids;
+            ids.reserve(feather_rest_.positions.size() / 3);
+            for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) ids.insert(ids.end(), feather_rest_.vertex_counts[f], static_cast<float>(f));
+            const AnimatedAttributes feathers{feather_rest_.positions, feather_frames_, &feather_rest_.normals, &normal_frames_, &feather_rest_.uvs, &ids};
+            nodes.push_back(add_animated_mesh(b, "feathers", feathers, feather_rest_.indices, feather_material(b)));
+        }
+    }
+    int feathers_material = -1;
+    for (size_t p = 0; p < parts_.size(); ++p) {
+        const MeshPart& part = parts_[p];
+        // The body: its vertices and triangles of the union, renumbered from 0.
+        const std::vector<float> rest(body_rest_.begin() + static_cast<long>(3 * part.first_vertex),
+                                      body_rest_.begin() + static_cast<long>(3 * (part.first_vertex + part.vertex_count)));
+        const std::vector<std::vector<float>> frames = slice_frames(body_frames_, 3 * part.first_vertex, 3 * part.vertex_count);
+        std::vector<uint32_t> indices;
+        for (size_t i = 3 * part.first_triangle; i < 3 * (part.first_triangle + part.triangle_count); ++i) {
+            indices.push_back(static_cast<uint32_t>(body_indices_[i] - part.first_vertex));
+        }
+        AnimatedAttributes body{rest, frames};
+        const BodyMaterial material = usable_material(p < part_materials_.size() ? part_materials_[p] : BodyMaterial{}, part.vertex_count);
+        if (material.base_color_texture) body.uvs = &material.uvs;
+        nodes.push_back(add_animated_mesh(b, part.name.c_str(), body, indices, body_material(b, material)));
+
+        // Its feathers: those rooted on its triangles, keeping their ids.
+        std::vector<float> positions, normals, uvs, ids;
+        std::vector<uint32_t> feather_indices;
+        std::vector<std::pair<size_t, size_t>> runs;  // (first vertex in the whole mesh, count)
+        size_t first = 0;
+        for (size_t f = 0; f < feather_rest_.vertex_counts.size(); ++f) {
+            const size_t count = feather_rest_.vertex_counts[f], from = first_vertex_[f];
+            first += count;
+            if (rest_triangle_[f] < part.first_triangle || rest_triangle_[f] >= part.first_triangle + part.triangle_count) continue;
+            runs.emplace_back(from, count);
+            ids.insert(ids.end(), count, static_cast<float>(f));
+        }
+        if (runs.empty()) continue;
+        std::vector<uint32_t> new_index(feather_rest_.positions.size() / 3, UINT32_MAX);
+        for (const auto& [from, count] : runs) {
+            for (size_t v = from; v < from + count; ++v) new_index[v] = static_cast<uint32_t>(positions.size() / 3 + v - from);
+            positions.insert(positions.end(), feather_rest_.positions.begin() + static_cast<long>(3 * from), feather_rest_.positions.begin() + static_cast<long>(3 * (from + count)));
+            normals.insert(normals.end(), feather_rest_.normals.begin() + static_cast<long>(3 * from), feather_rest_.normals.begin() + static_cast<long>(3 * (from + count)));
+            uvs.insert(uvs.end(), feather_rest_.uvs.begin() + static_cast<long>(2 * from), feather_rest_.uvs.begin() + static_cast<long>(2 * (from + count)));
+        }
+        for (size_t t = 0; t + 2 < feather_rest_.indices.size(); t += 3) {
+            const uint32_t a = new_index[feather_rest_.indices[t]];
+            if (a == UINT32_MAX) continue;  // another mesh's feather (a feather's triangles stay within it)
+            feather_indices.insert(feather_indices.end(), {a, new_index[feather_rest_.indices[t + 1]], new_index[feather_rest_.indices[t + 2]]});
+        }
+        const auto gather = [&](const std::vector<std::vector<float>>& all) {
+            std::vector<std::vector<float>> out;
+            for (const std::vector<float>& frame : all) {
+                std::vector<float> f;
+                f.reserve(positions.size());
+                for (const auto& [from, count] : runs) f.insert(f.end(), frame.begin() + static_cast<long>(3 * from), frame.begin() + static_cast<long>(3 * (from + count)));
+                out.push_back(std::move(f));
+            }
+            return out;
+        };
+        const std::vector<std::vector<float>> position_frames = gather(feather_frames_), normal_frames = gather(normal_frames_);
+        const AnimatedAttributes feathers{positions, position_frames, &normals, &normal_frames, &uvs, &ids};
+        if (feathers_material < 0) feathers_material = feather_material(b);
+        nodes.push_back(add_animated_mesh(b, (part.name + " feathers").c_str(), feathers, feather_indices, feathers_material));
     }
     if (!times_.empty()) add_frame_switch(b, times_, nodes);
     tinygltf::Scene scene;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "plumage.h"
+#include "mesh_union.h"
 #include "plumage_system.h"
 
 #include <array>
@@ -65,6 +66,14 @@ public:
     // The body's material (the host's default unless set).
     void set_body_material(BodyMaterial m) { body_material_ = std::move(m); }
 
+    // Several meshes dressed as one system: the .glb then holds a body and
+    // a feathers mesh per part, named after it (each feather goes with the
+    // mesh its root lies on at rest), each body with materials[part].
+    void set_parts(std::vector<MeshPart> parts, std::vector<BodyMaterial> materials) {
+        parts_ = std::move(parts);
+        part_materials_ = std::move(materials);
+    }
+
     // Feathers of a frame that were not at rest (by id); they are left out.
     size_t untracked_feathers() const { return untracked_; }
 
@@ -89,6 +98,9 @@ private:
     std::vector<std::vector<float>> normal_frames_;
     size_t untracked_ = 0;
     BodyMaterial body_material_;
+    std::vector<uint32_t> rest_triangle_;  // per rest feather: the triangle its root lies on
+    std::vector<MeshPart> parts_;
+    std::vector<BodyMaterial> part_materials_;
 };
 
 }  // namespace plumage_host

@@ -5,6 +5,7 @@
 #include "gltf_scene.h"
 #include "gltf_writer.h"
 #include "memory_usage.h"
+#include "mesh_union.h"
 #include "options.h"
 #include "plumage_system.h"
 #include "pose_writer.h"
@@ -33,26 +34,65 @@ VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const
     return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions)};
 }
 
-std::unique_ptr<AnimatedMesh> open_subject(const Options& opt, VertexMaps& maps, std::optional<BodyMaterial>& material) {
+// The input mesh's material, with the UVs its base colour texture needs.
+std::optional<BodyMaterial> mesh_material(const tinygltf::Model& model, const GltfScene& scene) {
+    std::optional<BodyMaterial> material = input_material(model, scene.mesh_index());
+    if (material && material->base_color_texture) {
+        try {
+            material->uvs = scene.vertex_attribute(model, "TEXCOORD_" + std::to_string(material->base_color_uv_set), 0, 2);
+        } catch (const std::exception&) {
+            material->uvs.clear();  // a primitive without them: the writer drops the texture
+        }
+    }
+    return material;
+}
+
+// What the host dresses: one mesh, or several as one (a MeshUnion), with
+// where each sits in what the library gets and its material.
+struct Subject {
+    std::unique_ptr<AnimatedMesh> mesh;
+    std::vector<MeshPart> parts;                          // one per dressed mesh
+    std::vector<std::optional<BodyMaterial>> materials;  // per part: the input's, if it had one
+};
+
+Subject open_subject(const Options& opt, VertexMaps& maps) {
+    Subject s;
     if (!opt.input.empty()) {
         const tinygltf::Model model = load_gltf_file(opt.input);
-        auto scene = std::make_unique<GltfScene>(model, opt.mesh, opt.animation);
-        maps = read_maps(*scene, model, opt);
-        material = input_material(model, scene->mesh_index());
-        if (material && material->base_color_texture) {
-            try {
-                material->uvs = scene->vertex_attribute(model, "TEXCOORD_" + std::to_string(material->base_color_uv_set), 0, 2);
-            } catch (const std::exception&) {
-                material->uvs.clear();  // a primitive without them: the writer drops the texture
+        const std::vector<int> chosen = choose_meshes(model, opt.meshes);
+        std::vector<std::unique_ptr<AnimatedMesh>> scenes;
+        VertexMaps all;
+        for (int m : chosen) {
+            auto scene = std::make_unique<GltfScene>(model, m, opt.animation);
+            VertexMaps part = read_maps(*scene, model, opt);
+            for (auto [to, from] : {std::pair{&all.spacing, &part.spacing}, {&all.length, &part.length}, {&all.width, &part.width}, {&all.flow, &part.flow}}) {
+                to->insert(to->end(), from->begin(), from->end());
             }
+            s.materials.push_back(mesh_material(model, *scene));
+            scenes.push_back(std::move(scene));
         }
-        return scene;
+        maps = std::move(all);
+        if (scenes.size() == 1) {
+            s.parts.push_back(MeshPart{scenes[0]->mesh_name(), chosen[0], 0, scenes[0]->vertex_count(), 0, scenes[0]->triangle_count()});
+            s.mesh = std::move(scenes[0]);
+        } else {
+            auto joined = std::make_unique<MeshUnion>(std::move(scenes), chosen);
+            s.parts = joined->parts();
+            s.mesh = std::move(joined);
+        }
+        return s;
     }
     const auto [rings, segments] = opt.model_resolution.value_or(std::array<uint32_t, 2>{ProceduralBody::kRings, ProceduralBody::kSegments});
     auto body = std::make_unique<ProceduralBody>(static_cast<int>(rings), static_cast<int>(segments));
-    if (!opt.mesh.empty() && opt.mesh != body->mesh_name() && opt.mesh != "0") throw UsageError("--mesh " + opt.mesh + ": the built-in model has one mesh, procedural_body");
+    for (const std::string& m : opt.meshes) {
+        if (m != body->mesh_name() && m != "0" && m != "all") throw UsageError("--mesh " + m + ": the built-in model has one mesh, procedural_body");
+    }
+    if (opt.meshes.size() > 1) throw UsageError("--mesh: the built-in model has one mesh, procedural_body; give --mesh once");
     if (!opt.animation.empty() && opt.animation != "swim" && opt.animation != "0") throw UsageError("--animation " + opt.animation + ": the built-in model has one clip, swim");
-    return body;
+    s.parts.push_back(MeshPart{body->mesh_name(), 0, 0, body->vertex_count(), 0, body->triangle_count()});
+    s.materials.emplace_back();
+    s.mesh = std::move(body);
+    return s;
 }
 
 PlumageConfig make_config(const Options& opt) {
@@ -137,7 +177,10 @@ class Session {
 public:
     explicit Session(const Options& opt) : opt_(opt) {
         const Stopwatch load_clock;
-        subject_ = open_subject(opt_, maps_, body_material_);
+        Subject subject = open_subject(opt_, maps_);
+        subject_ = std::move(subject.mesh);
+        parts_ = std::move(subject.parts);
+        materials_ = std::move(subject.materials);
         report_.set_timing("load_seconds", load_clock.seconds());
         report_.set_memory("after_load", memory_usage());
         clip_ = subject_->clip();
@@ -161,12 +204,26 @@ public:
         report_.set_sampling(sampling_stats(*sys_));
         report_.set_ordering(ordering_stats(*sys_));
         report_.set_static(frame_stats(*sys_), opt_.validate != ValidateWhen::None ? validate(*sys_) : std::nullopt);
+        if (several()) {
+            report_.set_parts(parts_);
+            for (size_t p = 0; p < parts_.size(); ++p) {
+                const MeshPart& part = parts_[p];
+                report_.set_part_static(p, part_stats(*sys_, part.first_triangle, part.triangle_count),
+                                        opt_.validate != ValidateWhen::None ? validate_part(*sys_, part.first_triangle, part.triangle_count) : std::nullopt);
+            }
+        }
         if (!opt_.poses.empty()) {
             poses_ = std::make_unique<PoseWriter>(opt_.poses, cfg, opt_.fps, subject_->rest_positions(), subject_->triangles(), times_, maps_);
         }
         if (!opt_.out.empty()) {
             recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
-            if (body_material_) recorder_->set_body_material(*body_material_);
+            if (several()) {
+                std::vector<BodyMaterial> materials;
+                for (const auto& m : materials_) materials.push_back(m.value_or(BodyMaterial{}));
+                recorder_->set_parts(parts_, std::move(materials));
+            } else if (materials_.front()) {
+                recorder_->set_body_material(*materials_.front());
+            }
         }
     }
 
@@ -185,6 +242,12 @@ public:
             if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_mesh(*sys_));
             if (poses_) poses_->add_frame(pose);
             report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage());
+            for (size_t p = 0; several() && p < parts_.size(); ++p) {
+                const MeshPart& part = parts_[p];
+                const bool check = validate_frame(opt_.validate, k, times_.size());
+                report_.add_part_frame(p, k, part_stats(*sys_, part.first_triangle, part.triangle_count),
+                                       check ? validate_part(*sys_, part.first_triangle, part.triangle_count) : std::nullopt);
+            }
             progress_.frame_done(k + 1, times_.size(), step_seconds);
         }
         progress_.clear();
@@ -194,6 +257,11 @@ public:
     void finish() {
         std::printf("plumage_gltf: %s, mesh \"%s\": %zu vertices, %zu triangles, %zu feathers\n", opt_.input.empty() ? "built-in model" : opt_.input.c_str(),
                     subject_->mesh_name().c_str(), subject_->vertex_count(), subject_->triangle_count(), feather_count_);
+        for (size_t p = 0; several() && p < parts_.size(); ++p) {
+            const MeshPart& part = parts_[p];
+            std::printf("plumage_gltf:   mesh %d \"%s\": %zu vertices, %zu triangles, %llu feathers\n", part.index, part.name.c_str(), part.vertex_count,
+                        part.triangle_count, static_cast<unsigned long long>(part_stats(*sys_, part.first_triangle, part.triangle_count).feathers));
+        }
         if (!times_.empty()) {
             std::printf("plumage_gltf: %zu frames of \"%s\" at %g fps, mean step %.3f ms\n", times_.size(), clip_ ? clip_->name.c_str() : "(no clip)",
                         opt_.fps, step_total_ / static_cast<double>(times_.size()) * 1e3);
@@ -219,11 +287,14 @@ public:
     }
 
 private:
+    bool several() const { return parts_.size() > 1; }
+
     const Options& opt_;
     Stopwatch total_;
     std::unique_ptr<AnimatedMesh> subject_;
     VertexMaps maps_;
-    std::optional<BodyMaterial> body_material_;  // the input mesh's, if it had one
+    std::vector<MeshPart> parts_;                          // the dressed meshes, one or more
+    std::vector<std::optional<BodyMaterial>> materials_;  // per part: the input mesh's, if it had one
     std::optional<ClipInfo> clip_;
     std::vector<double> times_;
     Report report_;

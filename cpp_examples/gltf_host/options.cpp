@@ -136,7 +136,8 @@ std::string usage_text() {
            "  no INPUT             the built-in procedural model (a swimming body, 6016 triangles)\n"
            "  --model-resolution RINGS,SEGMENTS   the built-in model's cross-sections along the body and vertices\n"
            "                       around each (default 96,32); 2*SEGMENTS*(RINGS-2) triangles: 502,200 gives 200000\n"
-           "  --mesh NAME|I        mesh to dress (default: the largest skinned or morphed mesh)\n"
+           "  --mesh NAME|I|all    mesh to dress (default: the largest skinned or morphed mesh); repeat it to dress\n"
+           "                       several meshes in one run, or `all` for every skinned or morphed mesh\n"
            "  --animation NAME|I   clip to play (default 0)\n"
            "  --fps F              sampling rate of the clip (default 30)\n"
            "  --start S            seconds into the clip of the first frame (default 0): a busy window of a long clip\n"
@@ -200,7 +201,7 @@ Options parse_options(int argc, const char* const* argv) {
             if (i + 1 >= argc) throw UsageError(arg + ": missing value");
             value = argv[++i];
         }
-        if (arg == "--mesh") o.mesh = value;
+        if (arg == "--mesh") o.meshes.push_back(value);
         else if (arg == "--animation") o.animation = value;
         else if (arg == "--fps") {
             o.fps = parse_real(arg, value);

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace plumage_host {
 
@@ -22,7 +23,7 @@ struct VertexMapSpec {
 struct Options {
     std::string input;  // empty: the built-in procedural model
     std::optional<std::array<uint32_t, 2>> model_resolution;  // rings, segments of the built-in model
-    std::string mesh;
+    std::vector<std::string> meshes;  // --mesh, in order (empty: the default mesh; "all": every deforming one)
     std::string animation;
     double fps = 30;
     double start = 0;                // seconds into the clip of the first frame

@@ -114,4 +114,20 @@ std::optional<PlumageFrameStats> frame_stats(const PlumageSystem& sys) {
 }
 std::optional<PlumageValidation> validate(const PlumageSystem& sys) { return stats_query(&plumage_system_validate, sys, "plumage_system_validate"); }
 
+PlumagePartStats part_stats(const PlumageSystem& sys, size_t first_triangle, size_t triangle_count) {
+    PlumagePartStats stats;
+    plumage_part_stats_init(&stats);
+    check(plumage_system_part_stats(&sys, first_triangle, triangle_count, &stats), &sys, "plumage_system_part_stats");
+    return stats;
+}
+
+std::optional<PlumageValidation> validate_part(const PlumageSystem& sys, size_t first_triangle, size_t triangle_count) {
+    PlumageValidation v;
+    plumage_validation_init(&v);
+    const uint32_t status = plumage_system_validate_part(&sys, first_triangle, triangle_count, &v);
+    if (status == PLUMAGE_STATUS_NOT_AVAILABLE) return std::nullopt;
+    check(status, &sys, "plumage_system_validate_part");
+    return v;
+}
+
 }  // namespace plumage_host

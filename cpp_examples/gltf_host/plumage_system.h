@@ -71,6 +71,10 @@ std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys);
 std::optional<PlumageOrderingStats> ordering_stats(const PlumageSystem& sys);
 std::optional<PlumageFrameStats> frame_stats(const PlumageSystem& sys);
 std::optional<PlumageValidation> validate(const PlumageSystem& sys);
+// The same restricted to the caller's triangles first .. first + count (one
+// of several meshes dressed as one system).
+PlumagePartStats part_stats(const PlumageSystem& sys, size_t first_triangle, size_t triangle_count);
+std::optional<PlumageValidation> validate_part(const PlumageSystem& sys, size_t first_triangle, size_t triangle_count);
 
 }  // namespace plumage_host
 

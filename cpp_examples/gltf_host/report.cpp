@@ -65,6 +65,35 @@ std::optional<double> fold(const json& frames, const char* key, int how) {
     return acc;
 }
 
+// The summary of `frames`: the step's work and times (`whole`: the run's
+// frames, not one mesh's), then the coat's quality at its worst.
+json summarise(const json& frames, bool whole) {
+    json s = {{"frames", frames.size()}};
+    const auto add = [&](const char* key, const char* field, int how) {
+        const std::optional<double> v = fold(frames, field, how);
+        if (!v) return;
+        if (how == 1) s[key] = static_cast<uint64_t>(*v);  // a maximum of counts is a count
+        else s[key] = *v;
+    };
+    add("mean_adjusted", "adjusted", 0);
+    if (whole) {
+        add("mean_verified", "verified", 0);
+        add("mean_step_seconds", "step_seconds", 0);
+        add("mean_library_step_seconds", "library_step_seconds", 0);
+        add("mean_neighbourhood_seconds", "neighbourhood_seconds", 0);
+        add("mean_levels", "levels", 0);
+    }
+    add("max_intersecting_pairs", "intersecting_pairs", 1);
+    add("max_body_penetrations", "body_penetrations", 1);
+    add("min_coverage", "coverage", -1);
+    add("max_tip_height_median", "tip_height_median", 2);
+    add("max_tip_height_p90", "tip_height_p90", 2);
+    add("max_bristle_percent", "bristle_percent", 2);
+    add("mean_pops_percent", "pops_percent", 0);
+    add("max_pops_percent", "pops_percent", 2);
+    return s;
+}
+
 }  // namespace
 
 double tidy(float v) {
@@ -181,30 +210,62 @@ void Report::set_memory(const std::string& phase, const MemoryUsage& m) {
     if (!j.empty()) memory_[phase] = std::move(j);
 }
 
-json Report::summary() const {
-    json s = {{"frames", frames_.size()}};
-    const auto add = [&](const char* key, const char* field, int how) {
-        const std::optional<double> v = fold(frames_, field, how);
-        if (!v) return;
-        if (how == 1) s[key] = static_cast<uint64_t>(*v);  // a maximum of counts is a count
-        else s[key] = *v;
-    };
-    add("mean_adjusted", "adjusted", 0);
-    add("mean_verified", "verified", 0);
-    add("mean_step_seconds", "step_seconds", 0);
-    add("mean_library_step_seconds", "library_step_seconds", 0);
-    add("mean_neighbourhood_seconds", "neighbourhood_seconds", 0);
-    add("mean_levels", "levels", 0);
-    add("max_intersecting_pairs", "intersecting_pairs", 1);
-    add("max_body_penetrations", "body_penetrations", 1);
-    add("min_coverage", "coverage", -1);
-    add("max_tip_height_median", "tip_height_median", 2);
-    add("max_tip_height_p90", "tip_height_p90", 2);
-    add("max_bristle_percent", "bristle_percent", 2);
-    add("mean_pops_percent", "pops_percent", 0);
-    add("max_pops_percent", "pops_percent", 2);
-    return s;
+void Report::set_parts(const std::vector<MeshPart>& parts) {
+    parts_.clear();
+    for (const MeshPart& p : parts) {
+        parts_.push_back(Part{{{"name", p.name},
+                               {"index", p.index},
+                               {"vertices", p.vertex_count},
+                               {"triangles", p.triangle_count},
+                               {"first_triangle", p.first_triangle}},
+                              0,
+                              nullptr,
+                              json::array()});
+    }
 }
+
+namespace {
+
+// A mesh's share of a frame's adjustment: adjusted, pops and the largest change.
+void put_part_stats(json& j, const PlumagePartStats& s, uint64_t feathers) {
+    if (PLUMAGE_FILLED(s, adjusted)) j["adjusted"] = s.adjusted;
+    if (PLUMAGE_FILLED(s, pops)) {
+        j["pops"] = s.pops;
+        if (feathers > 0) put(j, "pops_percent", 100.0 * static_cast<double>(s.pops) / static_cast<double>(feathers));
+    }
+    if (PLUMAGE_FILLED(s, largest_pose_change_deg)) put(j, "largest_pose_change_deg", s.largest_pose_change_deg);
+}
+
+}  // namespace
+
+void Report::set_part_static(size_t part, const PlumagePartStats& s, const std::optional<PlumageValidation>& v) {
+    Part& p = parts_.at(part);
+    if (PLUMAGE_FILLED(s, feathers)) p.feathers = s.feathers;
+    p.subject["feathers"] = p.feathers;
+    if (PLUMAGE_FILLED(s, placed)) p.subject["placed"] = s.placed;
+    p.static_figures = json::object();
+    if (v) put_validation(p.static_figures, *v);
+    if (p.static_figures.empty()) p.static_figures = nullptr;
+}
+
+void Report::add_part_frame(size_t part, size_t index, const PlumagePartStats& s, const std::optional<PlumageValidation>& v) {
+    Part& p = parts_.at(part);
+    json f = {{"index", index}};
+    put_part_stats(f, s, p.feathers);
+    if (v) put_validation(f, *v);
+    p.frames.push_back(std::move(f));
+}
+
+json Report::part_json(size_t part) const {
+    const Part& p = parts_.at(part);
+    json j = p.subject;
+    if (!p.static_figures.is_null()) j["static"] = p.static_figures;
+    j["frames"] = p.frames;
+    j["summary"] = summarise(p.frames, false);
+    return j;
+}
+
+json Report::summary() const { return summarise(frames_, true); }
 
 json Report::to_json() const {
     json j = {{"schema", 1}};
@@ -214,6 +275,10 @@ json Report::to_json() const {
     if (!sampling_.is_null()) j["sampling"] = sampling_;
     if (!ordering_.is_null()) j["ordering"] = ordering_;
     if (!static_.is_null()) j["static"] = static_;
+    if (!parts_.empty()) {
+        j["meshes"] = json::array();
+        for (size_t p = 0; p < parts_.size(); ++p) j["meshes"].push_back(part_json(p));
+    }
     if (!memory_.empty()) j["memory"] = memory_;
     j["frames"] = frames_;
     j["summary"] = summary();

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "memory_usage.h"
+#include "mesh_union.h"
 #include "plumage.h"
 
 #include <nlohmann/json.hpp>
@@ -26,6 +27,12 @@ public:
     // `memory` the process's memory right after it.
     void add_frame(size_t index, double time, double step_seconds, const std::optional<PlumageFrameStats>& s,
                    const std::optional<PlumageValidation>& v, const MemoryUsage& memory = {});
+    // Several meshes dressed as one system: each one's own figures, in
+    // `meshes` (the pairs of a mesh are those with at least one of its
+    // feathers, so a pair across two meshes counts in both).
+    void set_parts(const std::vector<MeshPart>& parts);
+    void set_part_static(size_t part, const PlumagePartStats& s, const std::optional<PlumageValidation>& v);
+    void add_part_frame(size_t part, size_t index, const PlumagePartStats& s, const std::optional<PlumageValidation>& v);
     // The process's memory at a named point of the run ("after_load", "after_create").
     void set_memory(const std::string& phase, const MemoryUsage& m);
     // Host-measured wall times of the run's phases.
@@ -36,6 +43,7 @@ public:
 
 private:
     nlohmann::ordered_json summary() const;
+    nlohmann::ordered_json part_json(size_t part) const;
 
     nlohmann::ordered_json subject_ = nlohmann::ordered_json::object();
     size_t feathers_ = 0;
@@ -45,6 +53,13 @@ private:
     nlohmann::ordered_json memory_ = nlohmann::ordered_json::object();
     nlohmann::ordered_json frames_ = nlohmann::ordered_json::array();
     nlohmann::ordered_json timing_ = nlohmann::ordered_json::object();
+    struct Part {
+        nlohmann::ordered_json subject;
+        uint64_t feathers = 0;
+        nlohmann::ordered_json static_figures;
+        nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    };
+    std::vector<Part> parts_;
 };
 
 // Every field of a library configuration, by name (theta in degrees).

@@ -143,6 +143,17 @@ pub unsafe extern "C" fn plumage_validation_init(out: *mut PlumageValidation) {
     unsafe { write_sized(out, |s| &mut s.struct_size) }
 }
 
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumagePartStats)`, ready for
+/// `plumage_system_part_stats`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumagePartStats`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_part_stats_init(out: *mut PlumagePartStats) {
+    // SAFETY: NULL or writable for one PlumagePartStats (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
 /// Writes `T::default()` with its `struct_size` (chosen by `field`) set to
 /// `size_of::<T>()`, unless `out` is NULL.
 ///
@@ -181,13 +192,13 @@ pub unsafe extern "C" fn plumage_system_create(
         // SAFETY: non-NULL out (contract: points to a PlumageSystem*).
         unsafe { *out = std::ptr::null_mut() };
         // SAFETY: forwarded pointer contracts of this function.
-        let (config, host_progress) = unsafe { types::read_config(cfg) }?;
+        let types::HostConfig { config, progress: host_progress, parallel_for } = unsafe { types::read_config(cfg) }?;
         let mesh = unsafe { types::read_mesh(rest) }?;
         let progress = match &host_progress {
             Some(p) => crate::progress::Progress::to(p),
             None => crate::progress::Progress::none(),
         };
-        let system = crate::System::new_with_progress(&config, &mesh, &progress)?;
+        let system = crate::System::new_with_parallel_for(&config, &mesh, &progress, parallel_for)?;
         let handle = Box::into_raw(Box::new(PlumageSystem::new(system, host_progress)));
         // SAFETY: as above.
         unsafe { *out = handle };
@@ -591,6 +602,101 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
         // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
         unsafe { write_versioned(out, VALIDATION_V1_SIZE, value, "PlumageValidation") }
     })
+}
+
+/// `plumage_system_validate` restricted to a part of the mesh: the
+/// caller's triangles `first_triangle .. first_triangle + triangle_count`
+/// of the rest mesh given to create (e.g. one of several meshes a host
+/// dresses as one system, their triangles one after the other). Every
+/// feather still counts as an obstacle and as a cover: `intersecting_pairs`
+/// counts the pairs with at least one feather rooted on the part (so a
+/// pair across two parts counts in both); `body_penetrations`,
+/// `mean_pitch_deg` and the tip heights are those of the part's feathers;
+/// the coverage probes are drawn on the part's skin (as many per feather as
+/// the whole validation draws). Only reads the system.
+/// PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's
+/// triangles; PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+///
+/// # Safety
+/// As `plumage_system_validate`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_validate_part(
+    sys: *const PlumageSystem,
+    first_triangle: usize,
+    triangle_count: usize,
+    out: *mut PlumageValidation,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let range = part_range(system, first_triangle, triangle_count)?;
+        let r = system.validate_part(range).ok_or_else(|| not_available("validation"))?;
+        let value = PlumageValidation {
+            struct_size: 0,
+            reserved: 0,
+            intersecting_pairs: r.intersecting_pairs as u64,
+            body_penetrations: r.body_penetrations as u64,
+            coverage: r.coverage,
+            mean_pitch_deg: r.mean_pitch_deg,
+            probes: r.probes as u64,
+            buried_probes: r.buried_probes as u64,
+            tip_height_median: r.tip_height_median,
+            tip_height_p90: r.tip_height_p90,
+            bristle_percent: r.bristle_percent,
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, VALIDATION_V1_SIZE, value, "PlumageValidation") }
+    })
+}
+
+/// The last create, step or evaluate's figures for the feathers rooted on
+/// the caller's triangles `first_triangle .. first_triangle +
+/// triangle_count` (see `PlumagePartStats`). Only reads the system.
+/// PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's
+/// triangles.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_part_stats(
+    sys: *const PlumageSystem,
+    first_triangle: usize,
+    triangle_count: usize,
+    out: *mut PlumagePartStats,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let r = system.part_report(part_range(system, first_triangle, triangle_count)?);
+        let value = PlumagePartStats {
+            struct_size: 0,
+            reserved: 0,
+            feathers: r.feathers as u64,
+            placed: r.placed as u64,
+            adjusted: r.adjusted as u64,
+            pops: r.pops as u64,
+            largest_pose_change_deg: f64::from(r.largest_pose_change).to_degrees(),
+        };
+        // SAFETY: non-NULL, caller struct of struct_size bytes (contract).
+        unsafe { write_versioned(out, std::mem::size_of::<PlumagePartStats>(), value, "PlumagePartStats") }
+    })
+}
+
+/// The caller's triangles `first .. first + count`, checked against the rest mesh.
+fn part_range(system: &crate::System, first: usize, count: usize) -> Result<std::ops::Range<u32>, Failure> {
+    let total = system.caller_triangle_count();
+    match first.checked_add(count) {
+        Some(end) if end <= total => Ok(first as u32..end as u32),
+        _ => Err(Failure::new(
+            PLUMAGE_STATUS_INDEX_OUT_OF_RANGE,
+            format!("triangles {first} + {count} run past the mesh's {total} triangles"),
+        )),
+    }
 }
 
 /// Saves the current frame (what the last successful create, step,

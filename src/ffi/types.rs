@@ -5,6 +5,7 @@ use super::status::*;
 use crate::{Config, MeshInput, Mode, SamplerKind};
 use glam::Vec3;
 use std::ffi::c_void;
+use std::sync::Arc;
 
 /// `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
 pub const PLUMAGE_SAMPLER_GUIDED: u32 = 0;
@@ -116,7 +117,43 @@ pub struct PlumageConfig {
     /// changes by more than this between frames counts as a pop in
     /// `PlumageFrameStats.pops` (radians, default 5°; a figure only).
     pub pop_threshold: f32,
+    /// Optional: the host's own parallel-for (TBB, a DCC's thread pool),
+    /// through which the system runs all its parallel work instead of
+    /// starting threads (NULL, the default: the library's own workers, see
+    /// `threads`). See `PlumageParallelForFn` for the contract. With
+    /// `threads` N ≥ 2 every call asks for N tasks (0 = one per core); with
+    /// `threads` = 1 the work runs on the calling thread and this is never
+    /// called. Results are byte-identical to the library's own threads.
+    pub parallel_for: PlumageParallelForFn,
+    /// Passed back to `parallel_for` unchanged as `host_context`.
+    pub parallel_for_context: *mut c_void,
 }
+
+/// One task of a parallel section, handed to the host's parallel-for:
+/// call it once with each index in `0 .. count` and the `task_context` that
+/// came with it. It never unwinds or throws into the host (a panic inside
+/// is caught by the library and reported by the call that started the
+/// work, as PLUMAGE_STATUS_PANIC).
+pub type PlumageTaskFn = Option<unsafe extern "C" fn(task_context: *mut c_void, index: u32)>;
+
+/// A host's parallel-for (`PlumageConfig.parallel_for`): must call
+/// `task(task_context, i)` exactly once for every `i` in `0 .. count`, on
+/// any of its threads (the calling thread included) and in any order,
+/// several at once or one after the other, and return only after every
+/// call has returned. The library calls it from inside its own calls
+/// (create, step, evaluate, validate, load_state, ...) on the thread that
+/// made them; from several threads at once only when the host makes
+/// read-only calls on one system concurrently, or uses it for several
+/// systems on several threads at once. A task may block until
+/// the others finish the work, but never waits for another task to start,
+/// so a host that runs fewer tasks at once than `count` is fine. Progress
+/// callbacks then come from the calling thread or from any thread running
+/// a task, still never two at once. A task run on a thread that is itself
+/// inside one of the library's own worker pools does nothing, and the
+/// library runs its share on the calling thread after `parallel_for`
+/// returns.
+pub type PlumageParallelForFn =
+    Option<unsafe extern "C" fn(host_context: *mut c_void, count: u32, task: PlumageTaskFn, task_context: *mut c_void)>;
 
 /// `plumage_config_init_preset`: contour feathers (the defaults of
 /// `plumage_config_init`).
@@ -282,6 +319,8 @@ impl PlumageConfig {
             length_per_spacing: c.length_per_spacing,
             width_per_spacing: c.width_per_spacing,
             pop_threshold: c.pop_threshold,
+            parallel_for: None,
+            parallel_for_context: std::ptr::null_mut(),
         }
     }
 
@@ -366,14 +405,54 @@ impl PlumageConfig {
 ///
 /// # Safety
 /// `cfg` is NULL or points to a `PlumageConfig` of at least `struct_size` bytes.
-pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<(Config, Option<HostProgress>), Failure> {
+pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<HostConfig, Failure> {
     if cfg.is_null() {
-        return Ok((Config::default(), None));
+        return Ok(HostConfig { config: Config::default(), progress: None, parallel_for: None });
     }
     let defaults = PlumageConfig::from_config(&Config::default());
     // SAFETY: forwarded contract.
     let raw = unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?;
-    Ok((raw.to_config()?, HostProgress::from_config(&raw)))
+    let parallel_for = raw.parallel_for.map(|run| {
+        Arc::new(HostParallelFor { run, context: raw.parallel_for_context }) as Arc<dyn crate::pool::ParallelFor>
+    });
+    Ok(HostConfig { config: raw.to_config()?, progress: HostProgress::from_config(&raw), parallel_for })
+}
+
+/// A caller's `PlumageConfig`: the checked configuration and its callbacks.
+pub(crate) struct HostConfig {
+    pub config: Config,
+    pub progress: Option<HostProgress>,
+    pub parallel_for: Option<Arc<dyn crate::pool::ParallelFor>>,
+}
+
+/// The host's parallel-for as the pools' [`crate::pool::ParallelFor`].
+#[derive(Debug)]
+struct HostParallelFor {
+    run: unsafe extern "C" fn(*mut c_void, u32, PlumageTaskFn, *mut c_void),
+    context: *mut c_void,
+}
+
+// SAFETY: the header's contract: the host's parallel-for may be called from
+// any thread the library calls from, and runs tasks on threads of its
+// choosing; the host owns its context.
+unsafe impl Send for HostParallelFor {}
+unsafe impl Sync for HostParallelFor {}
+
+impl crate::pool::ParallelFor for HostParallelFor {
+    fn parallel_for(&self, count: usize, task: &(dyn Fn(usize) + Sync)) {
+        /// What a `PlumageTaskFn` calls: the pool's task behind `context`.
+        unsafe extern "C" fn trampoline(context: *mut c_void, index: u32) {
+            // SAFETY: `context` is the `&&dyn Fn` passed below, alive until
+            // the host's parallel-for returns, which is after every task.
+            let task = unsafe { &*(context as *const &(dyn Fn(usize) + Sync)) };
+            // The pool's tasks catch their panics; nothing may unwind into C.
+            let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| task(index as usize)));
+        }
+        let count = u32::try_from(count).expect("a worker count below 2^32 (threads ≤ 1024)");
+        let task: &(dyn Fn(usize) + Sync) = task;
+        // SAFETY: a host function with the documented signature and contract.
+        unsafe { (self.run)(self.context, count, Some(trampoline), &task as *const _ as *mut c_void) }
+    }
 }
 
 /// Borrowed view of the caller's mesh arrays.
@@ -630,6 +709,33 @@ pub struct PlumageValidation {
     pub bristle_percent: f64,
 }
 
+/// Figures of the last create, step or evaluate restricted to a part of the
+/// mesh, a range of the caller's triangles (`plumage_system_part_stats`):
+/// the feathers rooted there. A host that dresses several meshes as one
+/// system (their triangles one after the other) reads each mesh's figures
+/// so. Fill with `plumage_part_stats_init` (or set `struct_size =
+/// sizeof(PlumagePartStats)`) before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumagePartStats {
+    /// Set by the caller to `sizeof(PlumagePartStats)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Padding; always 0.
+    pub reserved: u32,
+    /// Feathers rooted on the part's triangles.
+    pub feathers: u64,
+    /// Of those, feathers placed (not left out, collapsed to their root).
+    pub placed: u64,
+    /// Of those, feathers the last create, step or evaluate readjusted.
+    pub adjusted: u64,
+    /// Of those, feathers whose pose relative to their root changed by
+    /// more than `PlumageConfig.pop_threshold` in the last step or
+    /// evaluate (0 after create or a load), as `PlumageFrameStats.pops`.
+    pub pops: u64,
+    /// The largest such change among them, degrees.
+    pub largest_pose_change_deg: f64,
+}
+
 /// Caller buffers for `plumage_system_feather_geometry`: every feather as a
 /// mesh. Fill with `plumage_feather_geometry_init`, then point the buffers
 /// you want at your memory (NULL skips one); capacities count elements
@@ -740,4 +846,5 @@ const _: () = {
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 19);
     assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
+    assert!(size_of::<PlumagePartStats>() == 4 + 4 + 8 * 5);
 };

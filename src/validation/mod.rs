@@ -74,6 +74,47 @@ pub fn validate(
     }
 }
 
+/// [`validate`] restricted to a part of the coat: the feathers `member`
+/// marks (one flag per feather). Every feather is still an obstacle and a
+/// cover: the pairs are those with at least one member, the penetrations,
+/// pitch and tip heights the members', and the coverage probes are drawn on
+/// `skin`, which the caller restricts to the part's skin. Indices stay the
+/// whole coat's.
+#[allow(clippy::too_many_arguments)]
+pub fn validate_part(
+    feather_triangles: &[FeatherTriangles],
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &[FeatherPose],
+    body: &BodyIndex,
+    skin: &ProbeSkin<'_>,
+    probes: usize,
+    seed: u64,
+    member: &[bool],
+) -> Validation {
+    let (grid, owner) = feather_grid(feather_triangles);
+    let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
+    let coverage = count_covered(&grid, longest, skin, body, probes, seed);
+    let is_member = |i: usize| member.get(i).copied().unwrap_or(false);
+    let picked: Vec<usize> = (0..frames.len()).filter(|&i| is_member(i)).collect();
+    let (f, s, p): (Vec<RootFrame>, Vec<FeatherShape>, Vec<FeatherPose>) = (
+        picked.iter().map(|&i| frames[i]).collect(),
+        picked.iter().map(|&i| shapes[i]).collect(),
+        picked.iter().map(|&i| poses[i]).collect(),
+    );
+    let mut intersecting_pairs = intersecting_pairs_in(&grid, &owner);
+    intersecting_pairs.retain(|&(a, b)| is_member(a as usize) || is_member(b as usize));
+    Validation {
+        intersecting_pairs,
+        body_penetrations: body_penetrations(&f, &s, &p, body).into_iter().map(|k| picked[k as usize] as u32).collect(),
+        coverage: coverage.fraction(),
+        probes: coverage.probes,
+        buried_probes: coverage.buried,
+        mean_pitch_deg: mean_pitch_deg(&p),
+        tip_heights: summarise_tip_heights(&tip_heights(&f, &s, &p, body)),
+    }
+}
+
 /// Fraction of the probes of `skin` outside `body` whose normal ray meets
 /// one of `feather_triangles` within `reach` (see [`count_covered`]).
 pub fn coverage(

@@ -28,6 +28,8 @@ MODES = {"incremental": 0, "legacy": 1, "rebuild": 2}
 PHASES = {0: "preparing", 1: "sampling", 2: "ordering", 3: "adjusting"}
 
 ProgressFn = ctypes.CFUNCTYPE(c_int32, c_void_p, c_uint32, c_float)
+TaskFn = ctypes.CFUNCTYPE(None, c_void_p, c_uint32)
+ParallelForFn = ctypes.CFUNCTYPE(None, c_void_p, c_uint32, TaskFn, c_void_p)
 
 
 class Config(ctypes.Structure):
@@ -66,7 +68,21 @@ class Config(ctypes.Structure):
         ("length_per_spacing", c_float),
         ("width_per_spacing", c_float),
         ("pop_threshold", c_float),
+        ("parallel_for", ParallelForFn),
+        ("parallel_for_context", c_void_p),
     ]
+
+
+# PlumageConfig fields that are no keywords of `System`: the struct's size,
+# the callbacks and their contexts, and the flag behind `flow_source=None`.
+NON_KEYWORD_FIELDS = (
+    "struct_size",
+    "progress",
+    "progress_user_data",
+    "flow_source_enabled",
+    "parallel_for",
+    "parallel_for_context",
+)
 
 
 class MeshDesc(ctypes.Structure):

@@ -39,7 +39,7 @@ class Poses:
 def config_from_struct(raw: _ffi.Config) -> Dict[str, Any]:
     out: Dict[str, Any] = {}
     for name in (f[0] for f in _ffi.Config._fields_):
-        if name in ("struct_size", "progress", "progress_user_data", "flow_source_enabled"):
+        if name in _ffi.NON_KEYWORD_FIELDS:
             continue
         v = getattr(raw, name)
         out[name] = tuple(v) if isinstance(v, ctypes.Array) else v

@@ -201,7 +201,7 @@ FEATHER_DTYPE = np.dtype(
 )
 
 CONFIG_FIELDS = tuple(
-    f[0] for f in _ffi.Config._fields_ if f[0] not in ("struct_size", "progress", "progress_user_data", "flow_source_enabled")
+    f[0] for f in _ffi.Config._fields_ if f[0] not in _ffi.NON_KEYWORD_FIELDS
 )
 
 
