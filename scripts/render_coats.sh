@@ -14,12 +14,13 @@
 #   first seconds barely move, it walks from about 8 s)
 #   DATA=../shared/data (from the repo root)  BUILD=build  BLENDER=blender
 #   RENDER_GLB=/work/shared/tools/render_glb.py  PYTHON=python3 (with numpy)
+#   HOST_ARGS="" (more host options for every run, e.g. "--shaft-segments 4")
 #   VIEWS="35,25 -145,25 35,25@2.2" (azimuth,elevation[@zoom] of each view; the
 #   third is a close-up of the middle of the body)
 # A model whose file is missing is reported and skipped (exit status 1 at the end).
 set -euo pipefail
 if [ $# -ne 1 ] || [ "${1#-}" != "$1" ]; then
-  sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 repo="$(cd "$(dirname "$0")/.." && pwd)"
@@ -77,7 +78,8 @@ for entry in $MODELS; do
     frames=0
     [ "$kind" = clip ] && frames="$FRAMES"
     glb="$out/${name}_$kind.glb"
-    "$host" "${input[@]}" "${start[@]}" --feathers "$FEATHERS" --frames "$frames" --out "$glb" --report "$out/${name}_$kind.json" 2>&1 | { grep -v '^plumage_gltf: wrote' || true; }
+    # shellcheck disable=SC2086
+    "$host" "${input[@]}" "${start[@]}" --feathers "$FEATHERS" --frames "$frames" ${HOST_ARGS:-} --out "$glb" --report "$out/${name}_$kind.json" 2>&1 | { grep -v '^plumage_gltf: wrote' || true; }
     coats+=("$glb")
     # Rest: Blender frame 1 (no animation). Clip: the importer puts clip time t
     # at Blender frame t * 24, so a frame past the last key shows the last
