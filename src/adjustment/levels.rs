@@ -866,7 +866,8 @@ mod tests {
     use crate::rng::Rng;
 
     /// A sparse run gives the poses, adjusted and verified flags of a run
-    /// by levels over the same symmetric candidates.
+    /// by levels over the same symmetric candidates; by levels, the checks
+    /// made ahead on several threads change nothing either.
     #[test]
     fn a_sparse_run_matches_the_levels() {
         let mut rng = Rng::new(7);
@@ -917,6 +918,7 @@ mod tests {
             Selection::All,
         );
         assert_eq!(all.adjusted, n);
+        let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
         let mut checked = 0;
         for round in 0..6 {
             // Disturb some poses, then readjust a few seeds and check others.
@@ -953,7 +955,11 @@ mod tests {
                     (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
                 };
                 for pairs_only in [false, true] {
-                    let (by_levels, sparse) = (run(false, pairs_only), run(true, pairs_only));
+                    // By levels on three threads, which checks the suspects
+                    // ahead (Adjuster::precheck), and on one, which does not.
+                    let by_levels = threads[1].install(|| run(false, pairs_only));
+                    assert_eq!(by_levels, threads[0].install(|| run(false, pairs_only)), "round {round}");
+                    let sparse = run(true, pairs_only);
                     checked += by_levels.3 + by_levels.4;
                     assert_eq!(by_levels.0, sparse.0, "round {round}");
                     assert_eq!(by_levels.1, sparse.1, "round {round}");
