@@ -8,9 +8,11 @@
 //! count. A k-d tree (not a uniform grid) is used because root density
 //! varies over a body by the density field; the tree needs no cell size.
 //! Its leaves (up to 16 roots lying close together) also serve as cells
-//! for the obstacle candidates: pairs of leaves within reach of each other
-//! are compared root against root, which costs far less than one radius
-//! query per root.
+//! for the obstacle candidates: a hierarchy of boxes over the leaves finds
+//! each leaf's leaves within reach, and each root compares itself with
+//! their roots, which costs far less than one radius query per root. The
+//! leaves are shared out among the threads; each root's row and k nearest
+//! depend on the positions alone, so nothing depends on the thread count.
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
