@@ -169,6 +169,28 @@ pub struct Adjuster {
     cursor: Vec<u32>,
     outcomes: Vec<Visit>,
     workers: Vec<Worker>,
+    /// Verifying by levels on several threads: the suspects checked ahead
+    /// of the ordered pass, in parallel, against their obstacles as they
+    /// were before it ([`Precheck`]), by feather.
+    prechecked: Vec<Precheck>,
+    /// The feathers checked ahead, in order.
+    precheck_items: Vec<u32>,
+    precheck_outcomes: Vec<Precheck>,
+}
+
+/// The answer of an exact check made ahead of the ordered pass. It stands
+/// for the check the ordered pass would make as long as no obstacle of the
+/// feather changed pose before its turn (the check reads only the
+/// feather's own pose, its obstacles' poses and the body).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Precheck {
+    /// Not checked ahead.
+    #[default]
+    None,
+    /// The pose was clear.
+    Clear,
+    /// The pose met an obstacle or the body.
+    Blocked,
 }
 
 impl Adjuster {
@@ -365,6 +387,11 @@ impl Adjuster {
 
         let mut stats = AdjustStats { levels, ..AdjustStats::default() };
         let inputs = Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only };
+        self.prechecked.clear();
+        self.prechecked.resize(n, Precheck::None);
+        if !sparse && rayon::current_num_threads() > 1 {
+            self.precheck(&inputs, order, poses);
+        }
         if sparse {
             for (k, &i) in order.iter().enumerate() {
                 if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
@@ -374,7 +401,7 @@ impl Adjuster {
                 if !self.in_scope[i] {
                     continue;
                 }
-                let marks = Marks { moved: &self.moved, changed: &self.changed };
+                let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
                 let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
                 let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
                 self.apply(i, &visit, &inputs, poses, &mut stats);
@@ -397,7 +424,7 @@ impl Adjuster {
             }
             let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
             let outcomes = &mut self.outcomes[..items.len()];
-            let marks = Marks { moved: &self.moved, changed: &self.changed };
+            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
             let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
             run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
             let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
@@ -408,6 +435,49 @@ impl Adjuster {
         }
         stats.seconds = start.elapsed().as_secs_f64();
         Some(stats)
+    }
+
+    /// Verifying: checks every suspect that is not a seed (those the
+    /// ordered pass will most likely only check) ahead, in parallel chunks,
+    /// against the poses before the pass. Most checked feathers have no
+    /// obstacle that the pass changes before their turn, and their level
+    /// then takes this answer instead of checking again; it is the answer
+    /// the check would give there (same pose, same obstacles, same body),
+    /// so the result does not change, at any thread count. This spreads
+    /// the checks over the threads whatever the levels are: the obstacle
+    /// relation runs through thousands of levels of a few feathers.
+    fn precheck(&mut self, inputs: &Inputs<'_>, order: &[u32], poses: &[FeatherPose]) {
+        let Selection::Verify { seeds, suspects, .. } = inputs.selection else { return };
+        // Sized for every feather up front: how many are checked ahead
+        // varies from frame to frame, and the heap must not creep up.
+        let n = order.len();
+        self.precheck_items.clear();
+        self.precheck_items.reserve(n);
+        self.precheck_outcomes.reserve(n.saturating_sub(self.precheck_outcomes.len()));
+        self.precheck_items.extend(order.iter().copied().filter(|&i| {
+            let i = i as usize;
+            self.in_scope[i] && suspects[i] && !seeds[i]
+        }));
+        let items = &self.precheck_items;
+        self.precheck_outcomes.clear();
+        self.precheck_outcomes.resize(items.len(), Precheck::None);
+        let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+        let chunk = items.len().div_ceil(self.workers.len()).max(1);
+        items
+            .par_chunks(chunk)
+            .zip(self.precheck_outcomes.par_chunks_mut(chunk))
+            .zip(self.workers.par_iter_mut())
+            .for_each(|((items, outcomes), worker)| {
+                for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+                    let i = i as usize;
+                    collect_obstacle_ids(inputs, i, posed, worker);
+                    *out =
+                        if check_clear(inputs, i, poses, posed, worker) { Precheck::Clear } else { Precheck::Blocked };
+                }
+            });
+        for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
+            self.prechecked[i as usize] = outcome;
+        }
     }
 
     /// Records what became of feather `i`; an adjusted feather takes its
@@ -612,6 +682,8 @@ enum Visit {
 struct Marks<'a> {
     moved: &'a [bool],
     changed: &'a [bool],
+    /// Answers of the checks made ahead ([`Adjuster::precheck`]).
+    prechecked: &'a [Precheck],
 }
 
 /// Every feather's triangles at its current pose and a sphere around them.
@@ -689,30 +761,21 @@ fn adjust_one(
         }
         verify = true;
     }
-    // The ids first: a check needs only them (and the prepared boxes);
-    // the triangles are copied out only for a feather that is adjusted.
-    worker.obstacle_ids.clear();
-    worker.obstacle_ids.extend(
-        earlier
-            .filter(|&j| {
-                let (centre, radius) = posed.spheres[j];
-                reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
-            })
-            .map(|j| j as u32),
-    );
-    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
-    if verify {
-        let clear = if inputs.pairs_only {
-            let mine = feather_triangles(frame, shape, poses[i]);
-            let mine = FeatherBoxes::new(&mine);
-            !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
-        } else {
-            let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
-            pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
-        };
-        if clear {
+    // A check made ahead stands when no obstacle changed since.
+    let ahead = marks.prechecked.get(i).copied().unwrap_or_default();
+    let ahead = if verify && ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]) {
+        if ahead == Precheck::Clear {
             return Visit::Verified;
         }
+        Some(false)
+    } else {
+        None
+    };
+    // The ids first: a check needs only them (and the prepared boxes);
+    // the triangles are copied out only for a feather that is adjusted.
+    collect_obstacle_ids(inputs, i, posed, worker);
+    if verify && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
+        return Visit::Verified;
     }
     worker.obstacles.clear();
     worker.obstacles.extend(worker.obstacle_ids.iter().map(|&j| {
@@ -738,6 +801,42 @@ fn adjust_one(
         inputs.steps,
         &mut worker.field,
     ))
+}
+
+/// Fills `worker.obstacle_ids` with feather `i`'s earlier candidates that
+/// may matter to it at some size and pose (see [`ObstacleReach`]).
+fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: Posed<'_>, worker: &mut Worker) {
+    let ri = inputs.rank[i];
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
+    worker.obstacle_ids.clear();
+    worker.obstacle_ids.extend(
+        inputs
+            .candidates
+            .of(i)
+            .iter()
+            .map(|&j| j as usize)
+            .filter(|&j| inputs.rank[j] < ri)
+            .filter(|&j| {
+                let (centre, radius) = posed.spheres[j];
+                reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+            })
+            .map(|j| j as u32),
+    );
+}
+
+/// The exact check of feather `i` at its current pose against the
+/// obstacles in `worker.obstacle_ids` (and the body, unless the run tests
+/// the pairs only).
+fn check_clear(inputs: &Inputs<'_>, i: usize, poses: &[FeatherPose], posed: Posed<'_>, worker: &mut Worker) -> bool {
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    if inputs.pairs_only {
+        let mine = feather_triangles(frame, shape, poses[i]);
+        let mine = FeatherBoxes::new(&mine);
+        !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
+    } else {
+        let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+        pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
+    }
 }
 
 /// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or
@@ -767,7 +866,8 @@ mod tests {
     use crate::rng::Rng;
 
     /// A sparse run gives the poses, adjusted and verified flags of a run
-    /// by levels over the same symmetric candidates.
+    /// by levels over the same symmetric candidates; by levels, the checks
+    /// made ahead on several threads change nothing either.
     #[test]
     fn a_sparse_run_matches_the_levels() {
         let mut rng = Rng::new(7);
@@ -818,6 +918,7 @@ mod tests {
             Selection::All,
         );
         assert_eq!(all.adjusted, n);
+        let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
         let mut checked = 0;
         for round in 0..6 {
             // Disturb some poses, then readjust a few seeds and check others.
@@ -854,7 +955,11 @@ mod tests {
                     (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
                 };
                 for pairs_only in [false, true] {
-                    let (by_levels, sparse) = (run(false, pairs_only), run(true, pairs_only));
+                    // By levels on three threads, which checks the suspects
+                    // ahead (Adjuster::precheck), and on one, which does not.
+                    let by_levels = threads[1].install(|| run(false, pairs_only));
+                    assert_eq!(by_levels, threads[0].install(|| run(false, pairs_only)), "round {round}");
+                    let sparse = run(true, pairs_only);
                     checked += by_levels.3 + by_levels.4;
                     assert_eq!(by_levels.0, sparse.0, "round {round}");
                     assert_eq!(by_levels.1, sparse.1, "round {round}");

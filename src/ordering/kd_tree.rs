@@ -192,11 +192,15 @@ pub(super) fn insert_candidate(best: &mut Vec<(f32, u32)>, k: usize, d2: f32, id
     if best.len() == k {
         best.pop();
     }
-    let mut pos = best.len();
+    // Shifted by hand: the lists are short, and this is the k nearest's
+    // inner loop.
+    best.push((d2, id));
+    let mut pos = best.len() - 1;
     while pos > 0 && precedes((d2, id), best[pos - 1]) {
+        best[pos] = best[pos - 1];
         pos -= 1;
     }
-    best.insert(pos, (d2, id));
+    best[pos] = (d2, id);
 }
 
 /// The candidate order: distance, then index.

@@ -8,9 +8,11 @@
 //! count. A k-d tree (not a uniform grid) is used because root density
 //! varies over a body by the density field; the tree needs no cell size.
 //! Its leaves (up to 16 roots lying close together) also serve as cells
-//! for the obstacle candidates: pairs of leaves within reach of each other
-//! are compared root against root, which costs far less than one radius
-//! query per root.
+//! for the obstacle candidates: a hierarchy of boxes over the leaves finds
+//! each leaf's leaves within reach, and each root compares itself with
+//! their roots, which costs far less than one radius query per root. The
+//! leaves are shared out among the threads; each root's row and k nearest
+//! depend on the positions alone, so nothing depends on the thread count.
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
@@ -23,6 +25,7 @@ use super::kd_tree::{KdTree, insert_candidate, ranks_among_best};
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
 use crate::snapshot::{Reader, Writer};
+use rayon::prelude::*;
 
 /// Parameters of the neighbourhood search.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,9 +45,10 @@ impl Default for NeighbourParams {
     }
 }
 
-/// k-nearest neighbourhoods, the symmetric pair set and obstacle candidates
-/// of one pose. Create once, call [`rebuild`](Self::rebuild) every frame.
-#[derive(Clone, Debug, Default)]
+/// k-nearest neighbourhoods, the symmetric pair set and obstacle
+/// candidates of one pose. Create once, call [`rebuild`](Self::rebuild) every frame.
+/// A clone copies the relations only, not the scratch of `rebuild`.
+#[derive(Debug, Default)]
 pub struct Neighbourhoods {
     tree: KdTree,
     knn_offsets: Vec<u32>,
@@ -52,18 +56,30 @@ pub struct Neighbourhoods {
     pairs: Vec<(u32, u32)>,
     obstacle_offsets: Vec<u32>,
     obstacle_indices: Vec<u32>,
-    best: Vec<(f32, u32)>,
     bucket_offsets: Vec<u32>,
     bucket_items: Vec<u32>,
     fill_cursor: Vec<u32>,
-    scratch_indices: Vec<u32>,
     leaf_ids: Vec<u32>,
     leaf_starts: Vec<u32>,
     points: Vec<(glam::Vec3, f32)>,
     cells: Vec<Cell>,
-    pair_scratch: Vec<(u32, u32)>,
-    /// Root positions by index, for the distances of the k nearest.
-    positions: Vec<glam::Vec3>,
+    nodes: Vec<Node>,
+    chunks: Vec<Chunk>,
+    #[cfg(test)]
+    scratch_indices: Vec<u32>,
+}
+
+impl Clone for Neighbourhoods {
+    fn clone(&self) -> Self {
+        Self {
+            knn_offsets: self.knn_offsets.clone(),
+            knn_indices: self.knn_indices.clone(),
+            pairs: self.pairs.clone(),
+            obstacle_offsets: self.obstacle_offsets.clone(),
+            obstacle_indices: self.obstacle_indices.clone(),
+            ..Self::default()
+        }
+    }
 }
 
 impl Neighbourhoods {
@@ -83,8 +99,7 @@ impl Neighbourhoods {
         assert!(u32::try_from(frames.len()).is_ok(), "too many roots for u32 indices");
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
         self.tree.rebuild(frames.iter().map(|f| f.position));
-        self.rebuild_obstacles(frames, reach);
-        self.rebuild_nearest(frames, reach, params);
+        self.rebuild_rows(frames, reach, params);
         self.rebuild_pairs(frames.len());
     }
 
@@ -124,50 +139,6 @@ impl Neighbourhoods {
     /// The obstacle candidates as CSR (same layout as [`neighbours_csr`](Self::neighbours_csr)).
     pub fn obstacle_csr(&self) -> (&[u32], &[u32]) {
         (&self.obstacle_offsets, &self.obstacle_indices)
-    }
-
-    /// The k nearest roots of every root, by distance then index. Every
-    /// root within `reach_i + min reach` of root i whose normal agrees is an
-    /// obstacle candidate of i, so when i's k-th nearest candidate lies that
-    /// close its candidates hold its k nearest roots; only the other roots
-    /// (none on a closed coat) query the tree. Both ways rank candidates by
-    /// the same `(|r_j − r_i|², j)`, so the rows are those of the tree alone.
-    /// The candidates' distances are computed again from the positions,
-    /// bitwise as the obstacle pass compared them.
-    fn rebuild_nearest(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
-        let k = params.k;
-        let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
-        self.knn_offsets.clear();
-        self.knn_indices.clear();
-        self.knn_offsets.push(0);
-        self.positions.clear();
-        self.positions.extend(frames.iter().map(|f| f.position));
-        for (i, frame) in frames.iter().enumerate() {
-            self.best.clear();
-            if k > 0 {
-                let entries = self.obstacle_offsets[i] as usize..self.obstacle_offsets[i + 1] as usize;
-                let p = frame.position;
-                for &j in &self.obstacle_indices[entries] {
-                    // Bitwise the distance the obstacle pass compared
-                    // (negating a difference does not change its square).
-                    let d2 = (self.positions[j as usize] - p).length_squared();
-                    if ranks_among_best(&self.best, k, d2, j)
-                        && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
-                    {
-                        insert_candidate(&mut self.best, k, d2, j);
-                    }
-                }
-            }
-            let sure = reach.get(i).map_or(0.0, |&r| sanitized_reach(r) + min_reach);
-            let beyond = |d2: f32| d2.partial_cmp(&(sure * sure)).is_none_or(|o| o.is_gt());
-            if self.best.len() < k || self.best.last().is_some_and(|b| beyond(b.0)) {
-                let accept =
-                    |j: u32| j as usize != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
-                self.tree.nearest(frame.position, k, &accept, &mut self.best);
-            }
-            self.knn_indices.extend(self.best.iter().map(|&(_, j)| j));
-            self.knn_offsets.push(self.knn_indices.len() as u32);
-        }
     }
 
     /// Symmetrises the neighbourhoods into sorted unique `(lo, hi)` pairs with
@@ -212,26 +183,37 @@ impl Neighbourhoods {
         }
     }
 
-    /// Obstacle candidates, from the leaves of the tree: every pair of
-    /// leaves whose boxes come within the sum of their longest reaches is
-    /// compared root against root, each pair of roots once. The pruning is
-    /// exact (a box gap is never larger in `f32` than the gap between two
-    /// of the boxes' points, computed the same way), and so is the test,
-    /// `|r_i − r_j|² ≤ (reach_i + reach_j)²`, bitwise symmetric in i and j.
-    /// The pairs fill unsorted rows, whose transpose is the same relation
-    /// with every row sorted by index.
-    fn rebuild_obstacles(&mut self, frames: &[RootFrame], reach: &[f32]) {
+    /// Obstacle candidates and the k nearest roots, row by row.
+    ///
+    /// The tree's leaves (up to 16 roots lying close together) are cells:
+    /// a hierarchy of boxes over them (halves of the leaf sequence, which
+    /// the k-d tree laid out in space) finds for each leaf the leaves that
+    /// come within the sum of their longest reaches. Each root then
+    /// compares itself with the roots of those leaves, keeps those within
+    /// `reach_i + reach_j` as its row (sorted by index) and picks its k
+    /// nearest among them as it goes. The leaves are shared out among the
+    /// threads in chunks; every row depends on the positions alone, so the
+    /// rows are the same at any thread count, and they are those of one
+    /// radius query per root (the pruning is exact: a box gap is never
+    /// larger in `f32` than the gap between two of the boxes' points,
+    /// computed the same way; the test `|r_i − r_j|² ≤ (reach_i + reach_j)²`
+    /// is bitwise symmetric in i and j).
+    ///
+    /// The k nearest: every root within `reach_i + min reach` of root i
+    /// whose normal agrees is an obstacle candidate of i, so when i's k-th
+    /// nearest candidate lies that close its candidates hold its k nearest
+    /// roots; only the other roots (none on a closed coat) query the tree.
+    /// Both ways rank candidates by the same `(|r_j − r_i|², j)`, so the
+    /// rows are those of the tree alone.
+    fn rebuild_rows(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
         let n = frames.len();
-        self.obstacle_offsets.clear();
-        self.obstacle_indices.clear();
-        if reach.is_empty() {
-            self.obstacle_offsets.resize(n + 1, 0);
-            return;
-        }
         self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
         let ids = &self.leaf_ids;
+        let with_reach = !reach.is_empty();
         self.points.clear();
-        self.points.extend(ids.iter().map(|&i| (frames[i as usize].position, sanitized_reach(reach[i as usize]))));
+        self.points.extend(ids.iter().map(|&i| {
+            (frames[i as usize].position, if with_reach { sanitized_reach(reach[i as usize]) } else { 0.0 })
+        }));
         self.cells.clear();
         for w in self.leaf_starts.windows(2) {
             let points = &self.points[w[0] as usize..w[1] as usize];
@@ -241,62 +223,214 @@ impl Neighbourhoods {
                 });
             self.cells.push(Cell { lo, hi, reach });
         }
-        let (points, cells, starts) = (&self.points, &self.cells, &self.leaf_starts);
-        let pairs = &mut self.pair_scratch;
-        pairs.clear();
-        for (a, cell_a) in cells.iter().enumerate() {
-            let rows_a = starts[a] as usize..starts[a + 1] as usize;
-            for (b, cell_b) in cells.iter().enumerate().skip(a) {
-                if !cell_a.may_reach(cell_b) {
-                    continue;
-                }
-                let rows_b = starts[b] as usize..starts[b + 1] as usize;
-                for k in rows_a.clone() {
-                    let (p, r) = points[k];
-                    let from = if a == b { k + 1 } else { rows_b.start };
-                    for (l, &(q, s)) in points[from..rows_b.end].iter().enumerate() {
-                        let limit = r + s;
-                        let d2 = (q - p).length_squared();
-                        if d2 <= limit * limit {
-                            pairs.push((ids[k], ids[from + l]));
-                        }
-                    }
+        self.nodes.clear();
+        if !self.cells.is_empty() {
+            build_nodes(&self.cells, 0, self.cells.len() as u32, &mut self.nodes);
+        }
+        let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
+        // Chunks of leaves of about equal size, a few per thread.
+        let leaves = self.cells.len();
+        let chunks = (rayon::current_num_threads().max(1) * 4).min(leaves.max(1));
+        if self.chunks.len() < chunks {
+            self.chunks.resize_with(chunks, Chunk::default);
+        }
+        let per_chunk = leaves.div_ceil(chunks).max(1);
+        let ctx = RowContext {
+            frames,
+            reach,
+            params,
+            min_reach,
+            ids,
+            starts: &self.leaf_starts,
+            points: &self.points,
+            cells: &self.cells,
+            nodes: &self.nodes,
+            tree: &self.tree,
+        };
+        self.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, chunk)| {
+            let first = (c * per_chunk).min(leaves);
+            let last = ((c + 1) * per_chunk).min(leaves);
+            ctx.fill(first..last, chunk);
+        });
+        // Gather the rows by root index.
+        let chunks = &self.chunks[..chunks];
+        for (offsets, lens) in [(&mut self.obstacle_offsets, 0usize), (&mut self.knn_offsets, 1)] {
+            offsets.clear();
+            offsets.resize(n + 1, 0);
+            for chunk in chunks {
+                for (r, &i) in chunk.roots.iter().enumerate() {
+                    let len = if lens == 0 { chunk.row_lens[r] } else { chunk.knn_lens[r] };
+                    offsets[i as usize + 1] = len;
                 }
             }
-        }
-        // Unsorted symmetric rows, then their transpose.
-        let offsets = &mut self.obstacle_offsets;
-        offsets.resize(n + 1, 0);
-        for &(i, j) in pairs.iter() {
-            offsets[i as usize + 1] += 1;
-            offsets[j as usize + 1] += 1;
-        }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
-        self.fill_cursor.clear();
-        self.fill_cursor.extend_from_slice(&offsets[..n]);
-        self.scratch_indices.clear();
-        self.scratch_indices.resize(2 * pairs.len(), 0);
-        for &(i, j) in pairs.iter() {
-            for (row, other) in [(i, j), (j, i)] {
-                let slot = &mut self.fill_cursor[row as usize];
-                self.scratch_indices[*slot as usize] = other;
-                *slot += 1;
+            for i in 0..n {
+                offsets[i + 1] += offsets[i];
             }
         }
-        self.fill_cursor.clear();
-        self.fill_cursor.extend_from_slice(&offsets[..n]);
-        self.obstacle_indices.resize(self.scratch_indices.len(), 0);
-        for i in 0..n as u32 {
-            let entries = offsets[i as usize] as usize..offsets[i as usize + 1] as usize;
-            for &j in &self.scratch_indices[entries] {
-                let slot = &mut self.fill_cursor[j as usize];
-                self.obstacle_indices[*slot as usize] = i;
-                *slot += 1;
+        self.obstacle_indices.clear();
+        self.obstacle_indices.resize(self.obstacle_offsets[n] as usize, 0);
+        self.knn_indices.clear();
+        self.knn_indices.resize(self.knn_offsets[n] as usize, 0);
+        for chunk in chunks {
+            let (mut at, mut knn_at) = (0usize, 0usize);
+            for (r, &i) in chunk.roots.iter().enumerate() {
+                let (len, knn_len) = (chunk.row_lens[r] as usize, chunk.knn_lens[r] as usize);
+                let to = self.obstacle_offsets[i as usize] as usize;
+                self.obstacle_indices[to..to + len].copy_from_slice(&chunk.rows[at..at + len]);
+                let to = self.knn_offsets[i as usize] as usize;
+                self.knn_indices[to..to + knn_len].copy_from_slice(&chunk.knn[knn_at..knn_at + knn_len]);
+                at += len;
+                knn_at += knn_len;
             }
         }
     }
+}
+
+/// What the rows of a chunk of leaves read.
+struct RowContext<'a> {
+    frames: &'a [RootFrame],
+    reach: &'a [f32],
+    params: &'a NeighbourParams,
+    min_reach: f32,
+    ids: &'a [u32],
+    starts: &'a [u32],
+    points: &'a [(glam::Vec3, f32)],
+    cells: &'a [Cell],
+    nodes: &'a [Node],
+    tree: &'a KdTree,
+}
+
+impl RowContext<'_> {
+    /// The rows and k nearest of the roots of `leaves`, into `out`, root
+    /// after root in tree order.
+    fn fill(&self, leaves: std::ops::Range<usize>, out: &mut Chunk) {
+        out.roots.clear();
+        out.rows.clear();
+        out.row_lens.clear();
+        out.knn.clear();
+        out.knn_lens.clear();
+        let (frames, params, k) = (self.frames, self.params, self.params.k);
+        for a in leaves {
+            // The leaves within reach of leaf a (a included).
+            out.near.clear();
+            if !self.reach.is_empty() {
+                let cell = &self.cells[a];
+                out.stack.clear();
+                out.stack.push(0);
+                while let Some(x) = out.stack.pop() {
+                    let node = &self.nodes[x as usize];
+                    if !cell.may_reach(&node.cell) {
+                        continue;
+                    }
+                    if node.children == u32::MAX {
+                        out.near.push(node.leaf);
+                    } else {
+                        out.stack.push(node.children + 1);
+                        out.stack.push(node.children);
+                    }
+                }
+            }
+            // Their roots sorted by index, so that every row comes out sorted.
+            // (Sorted as packed (index, place in tree order) words: much
+            // cheaper than sorting the points themselves.)
+            out.keys.clear();
+            for &b in &out.near {
+                let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
+                out.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
+            }
+            out.keys.sort_unstable();
+            out.union.clear();
+            out.union.extend(out.keys.iter().map(|&key| ((key >> 32) as u32, self.points[key as u32 as usize])));
+            for t in self.starts[a] as usize..self.starts[a + 1] as usize {
+                let (p, r) = self.points[t];
+                let i = self.ids[t];
+                let frame = &frames[i as usize];
+                let row_start = out.rows.len();
+                out.best.clear();
+                // Branch-free: every candidate is written, and the cursor
+                // moves past those within reach.
+                out.rows.resize(row_start + out.union.len(), 0);
+                out.d2.resize(out.union.len(), 0.0);
+                let (slots, d2s) = (&mut out.rows[row_start..], &mut out.d2[..]);
+                let mut kept = 0;
+                for &(j, (q, s)) in &out.union {
+                    let limit = r + s;
+                    let d2 = (q - p).length_squared();
+                    slots[kept] = j;
+                    d2s[kept] = d2;
+                    kept += usize::from((d2 <= limit * limit) & (j != i));
+                }
+                out.rows.truncate(row_start + kept);
+                if k > 0 {
+                    for (&j, &d2) in out.rows[row_start..].iter().zip(&out.d2[..kept]) {
+                        if ranks_among_best(&out.best, k, d2, j)
+                            && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
+                        {
+                            insert_candidate(&mut out.best, k, d2, j);
+                        }
+                    }
+                }
+                let sure = self.reach.get(i as usize).map_or(0.0, |&r| sanitized_reach(r) + self.min_reach);
+                let beyond = |d2: f32| d2.partial_cmp(&(sure * sure)).is_none_or(|o| o.is_gt());
+                if k > 0 && (out.best.len() < k || out.best.last().is_some_and(|b| beyond(b.0))) {
+                    let accept = |j: u32| j != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+                    self.tree.nearest(p, k, &accept, &mut out.best);
+                }
+                out.roots.push(i);
+                out.row_lens.push((out.rows.len() - row_start) as u32);
+                out.knn.extend(out.best.iter().map(|&(_, j)| j));
+                out.knn_lens.push(out.best.len() as u32);
+            }
+        }
+    }
+}
+
+/// One chunk's rows, root after root, and its scratch.
+#[derive(Debug, Default)]
+struct Chunk {
+    roots: Vec<u32>,
+    rows: Vec<u32>,
+    row_lens: Vec<u32>,
+    knn: Vec<u32>,
+    knn_lens: Vec<u32>,
+    near: Vec<u32>,
+    keys: Vec<u64>,
+    union: Vec<(u32, (glam::Vec3, f32))>,
+    d2: Vec<f32>,
+    stack: Vec<u32>,
+    best: Vec<(f32, u32)>,
+}
+
+/// A box of the hierarchy over the leaves: a leaf (`children == u32::MAX`)
+/// or the union of two halves stored at `children` and `children + 1`.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    cell: Cell,
+    leaf: u32,
+    children: u32,
+}
+
+/// The hierarchy over the leaves `[lo, hi)`: its root at index 0.
+fn build_nodes(cells: &[Cell], lo: u32, hi: u32, nodes: &mut Vec<Node>) {
+    nodes.push(Node { cell: cells[lo as usize], leaf: lo, children: u32::MAX });
+    build_subtree(cells, lo, hi, nodes, 0);
+}
+
+/// Fills the node at `slot` with the leaves `[lo, hi)`; returns its box.
+fn build_subtree(cells: &[Cell], lo: u32, hi: u32, nodes: &mut Vec<Node>, slot: u32) -> Cell {
+    if hi - lo == 1 {
+        nodes[slot as usize] = Node { cell: cells[lo as usize], leaf: lo, children: u32::MAX };
+        return cells[lo as usize];
+    }
+    let children = nodes.len() as u32;
+    nodes.push(Node { cell: cells[lo as usize], leaf: lo, children: u32::MAX });
+    nodes.push(Node { cell: cells[lo as usize], leaf: lo, children: u32::MAX });
+    let mid = lo + (hi - lo) / 2;
+    let left = build_subtree(cells, lo, mid, nodes, children);
+    let right = build_subtree(cells, mid, hi, nodes, children + 1);
+    let cell = left.union(&right);
+    nodes[slot as usize] = Node { cell, leaf: lo, children };
+    cell
 }
 
 /// A leaf of the tree: the box of its roots and their longest reach.
@@ -308,6 +442,11 @@ struct Cell {
 }
 
 impl Cell {
+    /// The box around both cells, with the longer reach.
+    fn union(&self, other: &Cell) -> Cell {
+        Cell { lo: self.lo.min(other.lo), hi: self.hi.max(other.hi), reach: self.reach.max(other.reach) }
+    }
+
     /// Whether a root of `self` and one of `other` may lie within the sum
     /// of their reaches: the gap between the boxes, squared as a point
     /// distance is, is within the sum of the longest reaches. Per axis the
@@ -330,6 +469,7 @@ impl Neighbourhoods {
     /// same relation with every row sorted by index, without sorting.
     fn obstacles_by_tree(&mut self, frames: &[RootFrame], reach: &[f32]) {
         let n = frames.len();
+        self.tree.rebuild(frames.iter().map(|f| f.position));
         self.obstacle_offsets.clear();
         self.obstacle_offsets.push(0);
         self.scratch_indices.clear();
@@ -536,6 +676,85 @@ mod tests {
         let s = Neighbourhoods::read_state(&mut r, roots)?;
         r.finish()?;
         Ok(s)
+    }
+
+    /// Roots of a jittered 48 × 24 strip folding about the line x = 24 by
+    /// `t` half-turns, the folded half landing a little above the other (a
+    /// wing coming against the flank) and stretched along y as it goes.
+    fn folding_strip(t: f32, rng: &mut crate::rng::Rng) -> Vec<RootFrame> {
+        (0..48 * 24)
+            .map(|k| {
+                let (x, y) = ((k % 48) as f32 + 0.3 * rng.next_f32(), (k / 48) as f32 + 0.3 * rng.next_f32());
+                let (p, n) = if x <= 24.0 {
+                    (Vec3::new(x, y, 0.0), Vec3::Z)
+                } else {
+                    // Rolled about a hinge 0.6 above the plane.
+                    let a = std::f32::consts::PI * t;
+                    let (sin, cos) = a.sin_cos();
+                    let (u, v) = (x - 24.0, -0.6);
+                    let p = Vec3::new(24.0 + u * cos - v * sin, y * (1.0 + 0.1 * t), 0.6 + u * sin + v * cos);
+                    (p, Vec3::new(-sin, 0.0, cos))
+                };
+                RootFrame::from_normal_and_direction(p, n, Vec3::Y).unwrap()
+            })
+            .collect()
+    }
+
+    /// Every relation by exhaustive search, in the same `f32` operations.
+    fn exhaustive(frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
+        let n = frames.len();
+        let d2 = |i: usize, j: usize| (frames[j].position - frames[i].position).length_squared();
+        let rows = (0..n)
+            .map(|i| {
+                (0..n as u32)
+                    .filter(|&j| {
+                        let (j, limit) = (j as usize, sanitized_reach(reach[i]) + sanitized_reach(reach[j as usize]));
+                        j != i && d2(i, j) <= limit * limit
+                    })
+                    .collect()
+            })
+            .collect();
+        let knn = (0..n)
+            .map(|i| {
+                let mut all: Vec<(f32, u32)> = (0..n)
+                    .filter(|&j| j != i && normals_agree(&frames[i], &frames[j], params.min_normal_dot))
+                    .map(|j| (d2(i, j), j as u32))
+                    .collect();
+                all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                all.iter().take(params.k).map(|e| e.1).collect()
+            })
+            .collect();
+        (rows, knn)
+    }
+
+    #[test]
+    fn rows_and_nearest_match_the_exhaustive_search_on_a_fold_at_any_thread_count() {
+        let params = NeighbourParams::default();
+        let reach: Vec<f32> =
+            (0..48 * 24).map(|k| if k % 97 == 5 { 0.0 } else { 1.2 + (k % 7) as f32 * 0.2 }).collect();
+        let pools: Vec<rayon::ThreadPool> =
+            [1, 2, 3].iter().map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap()).collect();
+        let mut nb = Neighbourhoods::new();
+        let mut fold_pairs = 0;
+        for (step, t) in [0.0f32, 0.3, 0.6, 0.85, 0.97, 1.0].into_iter().enumerate() {
+            let frames = folding_strip(t, &mut crate::rng::Rng::new(5));
+            let (rows, knn) = exhaustive(&frames, &reach, &params);
+            // Pairs across the hinge line that only the fold brings together.
+            fold_pairs = (0..frames.len())
+                .map(|i| rows[i].iter().filter(|&&j| (i % 48 < 12) && (j as usize % 48 > 36)).count())
+                .sum::<usize>();
+            let mut seen = Vec::new();
+            for pool in &pools {
+                pool.install(|| nb.rebuild(&frames, &reach, &params));
+                for i in 0..frames.len() {
+                    assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, pose {step}");
+                    assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, pose {step}");
+                }
+                seen.push((nb.obstacle_csr().0.to_vec(), nb.obstacle_csr().1.to_vec(), nb.pairs().to_vec()));
+            }
+            assert!(seen.windows(2).all(|w| w[0] == w[1]), "pose {step} depends on the thread count");
+        }
+        assert!(fold_pairs > 100, "the folded pose must bring far roots together ({fold_pairs} pairs)");
     }
 
     #[test]
