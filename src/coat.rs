@@ -434,7 +434,8 @@ fn read_pose(r: &mut Reader<'_>, dressing: &Dressing, joints: usize) -> Result<F
     for b in &mut pose.bends[..joints] {
         *b = r.f32()?;
     }
-    let bent_within = pose.bends.iter().all(|b| b.abs() <= limits.bend_limit);
+    let (bend_low, bend_high) = limits.bend_range();
+    let bent_within = pose.bends.iter().all(|b| (bend_low..=bend_high).contains(b));
     if !(bent_within
         && pose.pitch >= limits.min_pitch
         && pose.pitch <= limits.max_pitch

@@ -114,8 +114,10 @@ pub struct Config {
     /// 1 is the rigid kite; with more, each joint may bend so the feather
     /// drapes over what lies beneath it.
     pub shaft_segments: u32,
-    /// Largest bend at each joint of a segmented shaft, radians, in
-    /// [0, 1.2] (0 keeps feathers straight).
+    /// Largest bend at each joint of a segmented shaft away from the skin,
+    /// radians, in [0, 1.2] (0 keeps feathers straight); toward the skin a
+    /// joint may bend twice as far (see
+    /// [`DOWN_BEND_PER_LIMIT`](crate::adjustment::DOWN_BEND_PER_LIMIT)).
     pub bend_limit: f32,
     /// Feather length as a multiple of the local spacing, when
     /// `feather_length` is 0 (default 4: a feather reaches over three to

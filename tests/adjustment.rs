@@ -808,8 +808,12 @@ fn drape_over(body_pos: &[Vec3], body_tris: &[[u32; 3]], root: Vec3) -> (Feather
     let (straight, straight_height) = tip_height(&AdjustParams { bend_limit: 0.0, ..AdjustParams::default() });
     let (draped, draped_height) = tip_height(&AdjustParams::default());
     assert!(straight.is_straight());
-    let limit = AdjustParams::default().bend_limit;
-    assert!(draped.bends.iter().all(|b| b.abs() <= limit + 1e-6), "bends {:?} beyond the limit {limit}", draped.bends);
+    let (down, up) = AdjustParams::default().bend_range();
+    assert!(
+        draped.bends.iter().all(|&b| b <= up + 1e-6 && b >= down - 1e-6),
+        "bends {:?} beyond the limits {down} .. {up}",
+        draped.bends
+    );
     (straight, straight_height, draped, draped_height)
 }
 

@@ -56,3 +56,19 @@ fn bent_feathers_lie_lower_than_kites() {
     assert!(draped.tip_height_median < kite.tip_height_median, "bending lowers the tips");
     assert!(draped.coverage >= kite.coverage - 0.01);
 }
+
+#[test]
+fn a_bent_coat_saved_and_loaded_steps_to_the_same_bytes() {
+    // A joint may bend further toward the skin than away from it: the
+    // saved poses must load back (a load refusing them fails here).
+    let shape = cylinder(1.0, 6.0, 48, 24);
+    let mesh = MeshInput::new(&shape.positions, &shape.indices);
+    let mut original = System::new(&bent(2), &mesh).unwrap();
+    let blob = original.save_state();
+    let mut restored = System::new(&Config { seed: 5, ..bent(1) }, &mesh).unwrap();
+    restored.load_state(&blob).unwrap();
+    let next = wave(&shape.positions, 0.5);
+    original.step(&next).unwrap();
+    restored.step(&next).unwrap();
+    assert_eq!(original.feather_triangles(), restored.feather_triangles());
+}

@@ -144,8 +144,9 @@ const DRAPE_RAISE_BISECTIONS: usize = 6;
 /// it rather than passing through to a clear place below. Only the segment
 /// being placed is checked (those before it are placed; a later one starts
 /// where it ends). The root segment comes down from the straight pitch
-/// towards the lowest pitch; every later one turns within the bend limit
-/// of the one before it, up or down.
+/// towards the lowest pitch; every later one turns from the one before it
+/// by up to the bend limit up, or [`super::DOWN_BEND_PER_LIMIT`] times it
+/// down.
 ///
 /// A segment that meets something even at its highest angle (an obstacle
 /// rising steeply ahead of a root segment laid low) sends the drape back:
@@ -175,8 +176,9 @@ fn drape(
     let mut hints = CheckHints::default();
     // Segment k's angle: the root's pitch for k = 0, else the bend of joint
     // k − 1 (relative to segment k − 1).
-    let high = |k: usize| if k == 0 { straight.pitch } else { params.bend_limit };
-    let low = |k: usize| if k == 0 { params.min_pitch } else { -params.bend_limit };
+    let (bend_low, bend_high) = params.bend_range();
+    let high = |k: usize| if k == 0 { straight.pitch } else { bend_high };
+    let low = |k: usize| if k == 0 { params.min_pitch } else { bend_low };
     let set = |pose: &mut FeatherPose, k: usize, angle: f32| {
         if k == 0 { pose.pitch = angle } else { pose.bends[k - 1] = angle }
     };

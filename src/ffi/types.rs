@@ -104,8 +104,9 @@ pub struct PlumageConfig {
     /// kite): with more, each joint may bend, so a feather drapes over the
     /// feathers and the skin beneath it instead of standing off them.
     pub shaft_segments: u32,
-    /// Largest bend at each joint of a segmented shaft, radians, in
-    /// [0, 1.2] (default 0.4; 0 keeps feathers straight).
+    /// Largest bend at each joint of a segmented shaft away from the skin,
+    /// radians, in [0, 1.2] (default 0.4; 0 keeps feathers straight);
+    /// toward the skin a joint may bend twice as far.
     pub bend_limit: f32,
     /// Feather length as a multiple of the local spacing when
     /// `feather_length` is 0 (default 4; scales 2), in (0, 20].
