@@ -105,24 +105,39 @@ def read_coat(path):
 
     Layout written by cpp_examples/gltf_host/gltf_writer.cpp: a mesh "body"
     and a mesh "feathers"; each stepped frame is a morph target (a
-    displacement from rest). The feathers are two triangles each, six indices
-    per feather in feather order: (root, tip, left corner), (root, right
-    corner, tip), over four shared vertices per feather, or six when the
-    corners could not be shared. Root and tip are therefore read through the
-    first triangle's first two indices, whichever vertex layout was used.
+    displacement from rest). The feathers' vertices carry `_FEATHER_ID` and
+    `TEXCOORD_0` (u from 0 at the root to 1 at the tip along the shaft, v =
+    0.5 on the shaft), so a feather's root and tip are its shaft vertices
+    (v = 0.5) of smallest and largest u, whatever the number of shaft
+    segments. Files without those attributes (older hosts: two triangles a
+    feather, (root, tip, left corner), (root, right corner, tip)) are read
+    through the first triangle's first two indices.
     """
     gltf, binary = read_glb(path)
     body_rest, body_frames, body_tris = mesh_poses(gltf, binary, "body")
     f_rest, f_frames, f_tris = mesh_poses(gltf, binary, "feathers")
-    if len(f_tris) % 2:
-        raise ValueError(f"{path}: odd feather triangle count {len(f_tris)}")
-    first = f_tris[0::2]
-    second = f_tris[1::2]
-    root_i, tip_i = first[:, 0], first[:, 1]
-    scale = max(float(np.ptp(f_rest, axis=0).max()), 1e-30) if len(f_rest) else 1.0
-    for a, b in ((second[:, 0], root_i), (second[:, 2], tip_i)):
-        if np.abs(f_rest[a] - f_rest[b]).max(initial=0.0) > 1e-5 * scale:
-            raise ValueError(f"{path}: feather triangles are not (root, tip, left), (root, right, tip)")
+    prim = next(m for m in gltf["meshes"] if m.get("name") == "feathers")["primitives"][0]
+    attributes = prim["attributes"]
+    if "_FEATHER_ID" in attributes and "TEXCOORD_0" in attributes:
+        ids = accessor(gltf, binary, attributes["_FEATHER_ID"])[:, 0].astype(np.int64)
+        uv = accessor(gltf, binary, attributes["TEXCOORD_0"]).astype(np.float64)
+        shaft = np.flatnonzero(np.abs(uv[:, 1] - 0.5) < 1e-4)
+        # Per feather (in id order), the shaft vertex of smallest u and of largest u.
+        by_root = shaft[np.lexsort((uv[shaft, 0], ids[shaft]))]
+        by_tip = shaft[np.lexsort((-uv[shaft, 0], ids[shaft]))]
+        first = np.r_[True, ids[by_root][1:] != ids[by_root][:-1]]
+        root_i, tip_i = by_root[first], by_tip[first]
+        if len(np.unique(ids)) != len(root_i):
+            raise ValueError(f"{path}: a feather without shaft vertices")
+    else:
+        if len(f_tris) % 2:
+            raise ValueError(f"{path}: odd feather triangle count {len(f_tris)}")
+        first_t, second = f_tris[0::2], f_tris[1::2]
+        root_i, tip_i = first_t[:, 0], first_t[:, 1]
+        scale = max(float(np.ptp(f_rest, axis=0).max()), 1e-30) if len(f_rest) else 1.0
+        for a, b in ((second[:, 0], root_i), (second[:, 2], tip_i)):
+            if np.abs(f_rest[a] - f_rest[b]).max(initial=0.0) > 1e-5 * scale:
+                raise ValueError(f"{path}: feather triangles are not (root, tip, left), (root, right, tip)")
     poses = []
     for body, feathers in zip([body_rest] + body_frames, [f_rest] + f_frames):
         poses.append({"body": body, "root": feathers[root_i], "tip": feathers[tip_i]})
