@@ -431,6 +431,14 @@ typedef struct PlumageConfig {
    * `PlumageFrameStats.pops` (radians, default 5°; a figure only).
    */
   float pop_threshold;
+  /**
+   * Incremental mode: the most a readjusted feather's pose relative to
+   * its root (pitch, roll, a bend) moves toward its newly solved pose in
+   * one frame (radians, default 2°; 0 = the solved pose at once). A
+   * feather that must lift to stay clear lifts at once; settling down is
+   * spread over frames, so the coat does not pop.
+   */
+  float settle_rate;
 } PlumageConfig;
 
 /**

@@ -129,6 +129,14 @@ pub struct Config {
     /// frame figures (radians, default 5°). A figure only: it changes no
     /// result.
     pub pop_threshold: f32,
+    /// Incremental mode: the most a readjusted feather's pose relative to
+    /// its root (pitch, roll, a bend) may move toward its newly solved pose
+    /// in one frame, radians (default 2°; 0 = no limit, the solved pose at
+    /// once). A feather that must lift to stay clear still lifts at once
+    /// (the smallest lift found clear by the exact checks, else the solved
+    /// pose); only settling is spread over frames, so the coat does not
+    /// pop (see [`crate::animation::coherence`]).
+    pub settle_rate: f32,
 }
 
 /// What a system dresses a surface with: the defaults of [`Config`] for
@@ -177,6 +185,7 @@ impl Default for Config {
             length_per_spacing: crate::feather::LENGTH_PER_SPACING,
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
             pop_threshold: crate::animation::coherence::DEFAULT_POP_THRESHOLD,
+            settle_rate: crate::animation::coherence::DEFAULT_SETTLE_RATE,
         }
     }
 }
@@ -213,6 +222,7 @@ impl Config {
             ("theta_s", self.theta_s),
             ("drift_tolerance", self.drift_tolerance),
             ("pop_threshold", self.pop_threshold),
+            ("settle_rate", self.settle_rate),
         ];
         for (name, v) in finite_nonneg {
             if !v.is_finite() || v < 0.0 {

@@ -409,6 +409,7 @@ impl System {
             length_per_spacing,
             width_per_spacing,
             pop_threshold: _,
+            settle_rate,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
@@ -445,6 +446,7 @@ impl System {
                 *collision_allowance,
                 *theta_s,
                 *drift_tolerance,
+                *settle_rate,
                 *curvature_min_scale,
                 *bend_limit,
                 *length_per_spacing,

@@ -116,6 +116,12 @@ pub struct PlumageConfig {
     /// changes by more than this between frames counts as a pop in
     /// `PlumageFrameStats.pops` (radians, default 5°; a figure only).
     pub pop_threshold: f32,
+    /// Incremental mode: the most a readjusted feather's pose relative to
+    /// its root (pitch, roll, a bend) moves toward its newly solved pose in
+    /// one frame (radians, default 2°; 0 = the solved pose at once). A
+    /// feather that must lift to stay clear lifts at once; settling down is
+    /// spread over frames, so the coat does not pop.
+    pub settle_rate: f32,
 }
 
 /// `plumage_config_init_preset`: contour feathers (the defaults of
@@ -282,6 +288,7 @@ impl PlumageConfig {
             length_per_spacing: c.length_per_spacing,
             width_per_spacing: c.width_per_spacing,
             pop_threshold: c.pop_threshold,
+            settle_rate: c.settle_rate,
         }
     }
 
@@ -321,6 +328,7 @@ impl PlumageConfig {
             self.length_per_spacing,
             self.width_per_spacing,
             self.pop_threshold,
+            self.settle_rate,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -356,6 +364,7 @@ impl PlumageConfig {
             length_per_spacing: self.length_per_spacing,
             width_per_spacing: self.width_per_spacing,
             pop_threshold: self.pop_threshold,
+            settle_rate: self.settle_rate,
         };
         cfg.validate()?;
         Ok(cfg)

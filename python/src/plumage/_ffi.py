@@ -66,6 +66,7 @@ class Config(ctypes.Structure):
         ("length_per_spacing", c_float),
         ("width_per_spacing", c_float),
         ("pop_threshold", c_float),
+        ("settle_rate", c_float),
     ]
 
 
