@@ -137,6 +137,16 @@ pub struct Config {
     /// pose); only settling is spread over frames, so the coat does not
     /// pop (see [`crate::animation::coherence`]).
     pub settle_rate: f32,
+    /// Keyframed checkpoints for scrubbing: every this many steps (and
+    /// after create) the system keeps its state blob in memory, so
+    /// [`System::seek`](crate::System::seek) can go back to the nearest
+    /// one and the caller replays the frames from there, reaching any
+    /// frame with the playback result. 0 (the default) keeps none. Changes
+    /// no result.
+    pub checkpoint_interval: u32,
+    /// Most checkpoints kept besides the one after create (default 64, at
+    /// least 1): past it, the oldest is dropped. Changes no result.
+    pub checkpoint_cap: u32,
 }
 
 /// What a system dresses a surface with: the defaults of [`Config`] for
@@ -186,6 +196,8 @@ impl Default for Config {
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
             pop_threshold: crate::animation::coherence::DEFAULT_POP_THRESHOLD,
             settle_rate: crate::animation::coherence::DEFAULT_SETTLE_RATE,
+            checkpoint_interval: 0,
+            checkpoint_cap: 64,
         }
     }
 }
@@ -228,6 +240,9 @@ impl Config {
             if !v.is_finite() || v < 0.0 {
                 return bad(format!("config.{name} must be finite and >= 0 (got {v})"));
             }
+        }
+        if self.checkpoint_cap == 0 {
+            return Err(Error::new(ErrorKind::InvalidArgument, "config.checkpoint_cap must be at least 1"));
         }
         if !(1..=crate::feather::MAX_SEGMENTS as u32).contains(&self.shaft_segments) {
             return bad(format!(

@@ -122,6 +122,14 @@ pub struct PlumageConfig {
     /// feather that must lift to stay clear lifts at once; settling down is
     /// spread over frames, so the coat does not pop.
     pub settle_rate: f32,
+    /// Scrubbing: every this many steps (and after create) the system
+    /// keeps its state blob in memory, so `plumage_system_seek` can go back
+    /// to the nearest one and the caller replays from there (default 0:
+    /// none kept). Changes no result.
+    pub checkpoint_interval: u32,
+    /// Most checkpoints kept besides the one after create (default 64, at
+    /// least 1); past it the oldest is dropped.
+    pub checkpoint_cap: u32,
 }
 
 /// `plumage_config_init_preset`: contour feathers (the defaults of
@@ -289,6 +297,8 @@ impl PlumageConfig {
             width_per_spacing: c.width_per_spacing,
             pop_threshold: c.pop_threshold,
             settle_rate: c.settle_rate,
+            checkpoint_interval: c.checkpoint_interval,
+            checkpoint_cap: c.checkpoint_cap,
         }
     }
 
@@ -365,6 +375,8 @@ impl PlumageConfig {
             width_per_spacing: self.width_per_spacing,
             pop_threshold: self.pop_threshold,
             settle_rate: self.settle_rate,
+            checkpoint_interval: self.checkpoint_interval,
+            checkpoint_cap: self.checkpoint_cap,
         };
         cfg.validate()?;
         Ok(cfg)

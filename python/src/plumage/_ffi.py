@@ -67,6 +67,8 @@ class Config(ctypes.Structure):
         ("width_per_spacing", c_float),
         ("pop_threshold", c_float),
         ("settle_rate", c_float),
+        ("checkpoint_interval", c_uint32),
+        ("checkpoint_cap", c_uint32),
     ]
 
 
