@@ -491,6 +491,26 @@ typedef struct PlumageConfig {
    * Passed back to `parallel_for` unchanged as `host_context`.
    */
   void *parallel_for_context;
+  /**
+   * Incremental mode: the most a readjusted feather's pose relative to
+   * its root (pitch, roll, a bend) moves toward its newly solved pose in
+   * one frame (radians, default 2°; 0 = the solved pose at once). A
+   * feather that must lift to stay clear lifts at once; settling down is
+   * spread over frames, so the coat does not pop.
+   */
+  float settle_rate;
+  /**
+   * Scrubbing: every this many steps (and after create) the system
+   * keeps its state blob in memory, so `plumage_system_seek` can go back
+   * to the nearest one and the caller replays from there (default 0:
+   * none kept). Changes no result.
+   */
+  uint32_t checkpoint_interval;
+  /**
+   * Most checkpoints kept besides the one after create (default 64, at
+   * least 1); past it the oldest is dropped.
+   */
+  uint32_t checkpoint_cap;
 } PlumageConfig;
 
 /**
@@ -1344,6 +1364,28 @@ uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
  * thread uses during the call. `blob` is NULL or holds `len` readable bytes.
  */
 uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blob, size_t len);
+
+/**
+ * Scrubbing with keyframed checkpoints (`PlumageConfig.checkpoint_interval`
+ * K > 0: after create and every K-th step of the playback the system keeps
+ * its state blob in memory, at most `checkpoint_cap` besides the first).
+ * Prepares the system to reach the state after `frame_index` steps and
+ * writes to `*out_from` the frame count it now stands at: the caller then
+ * steps it with the positions of frames `*out_from` .. `frame_index` − 1
+ * of its clip (step k takes the clip's frame k) and gets byte for byte
+ * what playback gave. Seeking forward within the playback keeps the
+ * current frame; otherwise the nearest checkpoint at or before
+ * `frame_index` is loaded. After `plumage_system_evaluate` or
+ * `plumage_system_load_state` no checkpoints are kept until a seek.
+ * Checkpoints off: PLUMAGE_STATUS_INVALID_ARGUMENT. On any error the
+ * system is exactly as it was.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create` that no other
+ * thread uses during the call. `out_from` is NULL or points to a writable
+ * `uint64_t`.
+ */
+uint32_t plumage_system_seek(struct PlumageSystem *sys, uint64_t frame_index, uint64_t *out_from);
 
 /**
  * Copies the message of the last failed call on `sys` into `buf` (at most

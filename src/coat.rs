@@ -57,6 +57,8 @@ pub struct Dressing {
     pub drift_tolerance: f32,
     /// Recompute neighbourhoods at the current pose every frame.
     pub recompute_neighbourhoods: bool,
+    /// The incremental mode's settle rate (`Config::settle_rate`).
+    pub settle_rate: f32,
 }
 
 impl Dressing {
@@ -81,6 +83,7 @@ impl Dressing {
             theta_s: config.theta_s,
             drift_tolerance: config.drift_tolerance,
             recompute_neighbourhoods: config.recompute_neighbourhoods,
+            settle_rate: config.settle_rate,
         }
     }
 
@@ -142,6 +145,10 @@ pub struct Coat {
     pub body: BodyIndex,
     /// How far each feather's surroundings moved since it was last adjusted.
     pub staleness: Staleness,
+    /// Feathers held back from their solved pose by the settle rate: the
+    /// incremental mode readjusts them again next frame (empty or all
+    /// false after a solve).
+    pub settling: Vec<bool>,
     /// 0 after creation, then one more per step.
     pub frame_index: u64,
     /// Figures of the last static order.
@@ -236,6 +243,7 @@ impl Coat {
         progress.check(Phase::Adjusting, 1.0)?;
         let stats = stats.unwrap_or_default();
         self.staleness.reset(dressing.len());
+        self.settling.clear();
         self.frame_report = FrameReport {
             frame_index: self.frame_index,
             adjusted: stats.adjusted,
@@ -298,7 +306,8 @@ impl Coat {
 /// counts); the frame report (frame index and ten counts as u64, then the
 /// level count u64); the neighbourhoods
 /// ([`Neighbourhoods::write_state`]); the order ([`PriorityOrder::write_state`]);
-/// the staleness ([`Staleness::write_state`]).
+/// the staleness ([`Staleness::write_state`]); the settling flags (u64
+/// count, 0 or one per feather, then a byte 0 or 1 each).
 impl Coat {
     /// Appends the coat's state to a state blob.
     pub fn write_state(&self, w: &mut Writer, joints: usize) {
@@ -340,6 +349,8 @@ impl Coat {
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
         self.staleness.write_state(w);
+        w.u64(self.settling.len() as u64);
+        self.settling.iter().for_each(|&s| w.u8(u8::from(s)));
     }
 
     /// Reads a coat written by [`write_state`](Self::write_state) for
@@ -395,6 +406,18 @@ impl Coat {
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
         let order = PriorityOrder::read_state(r, n)?;
         let staleness = Staleness::read_state(r, n)?;
+        let settling_count = r.len(1, None)?;
+        if settling_count != 0 && settling_count != n {
+            return Err(invalid_state("the saved settling flags are not one per feather"));
+        }
+        let mut settling = Vec::with_capacity(settling_count);
+        for _ in 0..settling_count {
+            match r.u8()? {
+                0 => settling.push(false),
+                1 => settling.push(true),
+                _ => return Err(invalid_state("a saved settling flag is not 0 or 1")),
+            }
+        }
         if order.pairs() != neighbourhoods.pairs() {
             return Err(invalid_state("the saved order's pairs are not the saved neighbourhoods' pairs"));
         }
@@ -403,6 +426,7 @@ impl Coat {
             neighbourhoods,
             order,
             staleness,
+            settling,
             frame_index,
             ordering_report,
             frame_report,

@@ -131,6 +131,24 @@ pub struct Config {
     /// frame figures (radians, default 5°). A figure only: it changes no
     /// result.
     pub pop_threshold: f32,
+    /// Incremental mode: the most a readjusted feather's pose relative to
+    /// its root (pitch, roll, a bend) may move toward its newly solved pose
+    /// in one frame, radians (default 2°; 0 = no limit, the solved pose at
+    /// once). A feather that must lift to stay clear still lifts at once
+    /// (the smallest lift found clear by the exact checks, else the solved
+    /// pose); only settling is spread over frames, so the coat does not
+    /// pop (see [`crate::animation::coherence`]).
+    pub settle_rate: f32,
+    /// Keyframed checkpoints for scrubbing: every this many steps (and
+    /// after create) the system keeps its state blob in memory, so
+    /// [`System::seek`](crate::System::seek) can go back to the nearest
+    /// one and the caller replays the frames from there, reaching any
+    /// frame with the playback result. 0 (the default) keeps none. Changes
+    /// no result.
+    pub checkpoint_interval: u32,
+    /// Most checkpoints kept besides the one after create (default 64, at
+    /// least 1): past it, the oldest is dropped. Changes no result.
+    pub checkpoint_cap: u32,
 }
 
 /// What a system dresses a surface with: the defaults of [`Config`] for
@@ -179,6 +197,9 @@ impl Default for Config {
             length_per_spacing: crate::feather::LENGTH_PER_SPACING,
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
             pop_threshold: crate::animation::coherence::DEFAULT_POP_THRESHOLD,
+            settle_rate: crate::animation::coherence::DEFAULT_SETTLE_RATE,
+            checkpoint_interval: 0,
+            checkpoint_cap: 64,
         }
     }
 }
@@ -215,11 +236,15 @@ impl Config {
             ("theta_s", self.theta_s),
             ("drift_tolerance", self.drift_tolerance),
             ("pop_threshold", self.pop_threshold),
+            ("settle_rate", self.settle_rate),
         ];
         for (name, v) in finite_nonneg {
             if !v.is_finite() || v < 0.0 {
                 return bad(format!("config.{name} must be finite and >= 0 (got {v})"));
             }
+        }
+        if self.checkpoint_cap == 0 {
+            return Err(Error::new(ErrorKind::InvalidArgument, "config.checkpoint_cap must be at least 1"));
         }
         if !(1..=crate::feather::MAX_SEGMENTS as u32).contains(&self.shaft_segments) {
             return bad(format!(

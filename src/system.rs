@@ -21,6 +21,7 @@ use crate::stats::{FeatherRecord, FrameReport, OrderingReport, PartReport, Sampl
 use crate::surface::Surface;
 use crate::validation::{ProbeSkin, Validation, validate, validate_part};
 use glam::Vec3;
+use std::collections::BTreeMap;
 
 /// Probes per feather for the coverage figure of [`System::validate`].
 const COVERAGE_PROBES_PER_FEATHER: usize = 4;
@@ -45,6 +46,11 @@ pub struct System {
     /// The poses before the last step or evaluate, and how they changed.
     previous_poses: Vec<FeatherPose>,
     pose_changes: PoseChanges,
+    /// State blobs by frame count (see [`System::seek`]).
+    checkpoints: BTreeMap<u64, Vec<u8>>,
+    /// Whether the coat is what stepping from create gives (no evaluate or
+    /// load since create or the last seek): only then are checkpoints kept.
+    on_playback: bool,
     #[cfg(feature = "test-hooks")]
     test_panic: std::sync::atomic::AtomicBool,
 }
@@ -119,6 +125,8 @@ impl System {
             frame_positions: Vec::new(),
             previous_poses: Vec::new(),
             pose_changes: PoseChanges::default(),
+            checkpoints: BTreeMap::new(),
+            on_playback: true,
             #[cfg(feature = "test-hooks")]
             test_panic: Default::default(),
         };
@@ -126,6 +134,7 @@ impl System {
         let Self { pool, dressing, coat, work, .. } = &mut system;
         pool.install(|| coat.solve(dressing, &rest, work, progress))?;
         system.export();
+        system.keep_checkpoint();
         Ok(system)
     }
 
@@ -342,7 +351,9 @@ impl System {
             } else {
                 pool.install(|| step_coat(coat, dressing, frame_positions, work, step_work, p))
             }
-        })
+        })?;
+        self.keep_checkpoint();
+        Ok(())
     }
 
     /// Solves the pose from scratch, independent of history (the frame count
@@ -358,7 +369,11 @@ impl System {
         self.transaction(positions, progress, |s, p| {
             let Self { pool, dressing, coat, work, frame_positions, .. } = s;
             pool.install(|| coat.solve(dressing, frame_positions, work, p))
-        })
+        })?;
+        // Later steps no longer continue the playback: keep no checkpoint
+        // of them until a seek.
+        self.on_playback = false;
+        Ok(())
     }
 
     /// Runs `update` on the welded `positions`; when it fails (it can only
@@ -438,7 +453,59 @@ impl System {
         self.pose_changes = PoseChanges::default();
         self.previous_poses.clear();
         self.export();
+        self.on_playback = false;
         Ok(())
+    }
+
+    /// Keyframed checkpoints (`Config::checkpoint_interval` K > 0): after
+    /// create and every K-th step of the playback, the system keeps its
+    /// state blob. `seek(frame)` prepares the system to reach the state
+    /// after `frame` steps and returns the frame count it now stands at:
+    /// the caller steps it with the positions of the frames from there up
+    /// to `frame`, and gets the bytes playback gave. Seeking forward from
+    /// the current frame of the playback keeps it (the caller replays
+    /// from there); otherwise the nearest checkpoint at or before `frame`
+    /// is loaded. Refused with `InvalidArgument` when checkpoints are off;
+    /// nothing changes on error.
+    pub fn seek(&mut self, frame: u64) -> Result<u64> {
+        if self.config.checkpoint_interval == 0 {
+            return Err(Error::new(
+                ErrorKind::InvalidArgument,
+                "config.checkpoint_interval is 0: no checkpoints are kept to seek with",
+            ));
+        }
+        let (&at, blob) =
+            self.checkpoints.range(..=frame).next_back().expect("the checkpoint after create is always kept");
+        let here = self.coat.frame_index;
+        if self.on_playback && here <= frame && here >= at {
+            return Ok(here);
+        }
+        let blob = blob.clone();
+        self.load_state(&blob)?;
+        self.on_playback = true;
+        Ok(at)
+    }
+
+    /// The frame counts of the checkpoints kept, oldest first.
+    pub fn checkpoint_frames(&self) -> Vec<u64> {
+        self.checkpoints.keys().copied().collect()
+    }
+
+    /// Keeps the current state as a checkpoint when it is one (see
+    /// [`System::seek`]), dropping the oldest past the cap (never the one
+    /// after create).
+    fn keep_checkpoint(&mut self) {
+        let every = u64::from(self.config.checkpoint_interval);
+        let frame = self.coat.frame_index;
+        if every == 0 || !self.on_playback || frame % every != 0 {
+            return;
+        }
+        let blob = self.save_state();
+        self.checkpoints.insert(frame, blob);
+        while self.checkpoints.len() > self.config.checkpoint_cap as usize + 1 {
+            let oldest = self.checkpoints.keys().copied().find(|&k| k != 0).expect("more than one checkpoint");
+            self.checkpoints.remove(&oldest);
+        }
     }
 
     /// What a blob must match to be loaded: a hash of every configuration
@@ -478,6 +545,9 @@ impl System {
             length_per_spacing,
             width_per_spacing,
             pop_threshold: _,
+            settle_rate,
+            checkpoint_interval: _,
+            checkpoint_cap: _,
         } = &self.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
@@ -514,6 +584,7 @@ impl System {
                 *collision_allowance,
                 *theta_s,
                 *drift_tolerance,
+                *settle_rate,
                 *curvature_min_scale,
                 *bend_limit,
                 *length_per_spacing,

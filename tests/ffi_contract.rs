@@ -515,3 +515,40 @@ fn presets_fill_the_config() {
     }
     assert!((length[0] - 4.0).abs() < 0.5 && (length[1] - 2.0).abs() < 0.3, "longest per spacing {length:?}");
 }
+
+#[test]
+fn seek_returns_the_frame_to_replay_from_and_refuses_without_checkpoints() {
+    let (pos, idx) = grid_soup();
+    let d = desc(&pos, &idx);
+    let mut cfg = std::mem::MaybeUninit::<PlumageConfig>::uninit();
+    unsafe { plumage_config_init(cfg.as_mut_ptr()) };
+    let mut cfg = unsafe { cfg.assume_init() };
+    assert_eq!((cfg.checkpoint_interval, cfg.checkpoint_cap), (0, 64), "defaults");
+    // Off: refused, the system unchanged.
+    let sys = create(&pos, &idx);
+    let mut from = 7u64;
+    assert_eq!(unsafe { plumage_system_seek(sys, 3, &mut from) }, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    assert!(system_error(sys).contains("checkpoint_interval"), "{}", system_error(sys));
+    assert_eq!(from, 7, "a refused seek writes nothing");
+    unsafe { plumage_system_destroy(sys) };
+    cfg.checkpoint_cap = 0;
+    expect_refused(&cfg, &d, PLUMAGE_STATUS_INVALID_ARGUMENT);
+    cfg.checkpoint_cap = 4;
+    cfg.checkpoint_interval = 2;
+    let mut sys = null_mut();
+    assert_eq!(unsafe { plumage_system_create(&cfg, &d, &mut sys) }, PLUMAGE_STATUS_OK, "{}", thread_error());
+    let frame: Vec<f32> = pos.chunks(3).flat_map(|p| [p[0], p[1], p[2] + 0.05 * p[0] * p[0]]).collect();
+    for _ in 0..5 {
+        assert_eq!(unsafe { plumage_system_step(sys, frame.as_ptr(), frame.len() / 3) }, PLUMAGE_STATUS_OK);
+    }
+    assert_eq!(unsafe { plumage_system_seek(sys, 3, null_mut()) }, PLUMAGE_STATUS_NULL_POINTER);
+    assert_eq!(unsafe { plumage_system_seek(sys, 3, &mut from) }, PLUMAGE_STATUS_OK, "{}", system_error(sys));
+    assert_eq!(from, 2, "the checkpoint at or before frame 3");
+    assert_eq!(unsafe { plumage_system_seek(sys, 9, &mut from) }, PLUMAGE_STATUS_OK);
+    assert_eq!(from, 4, "a later checkpoint than the current frame is nearer");
+    assert_eq!(unsafe { plumage_system_step(sys, frame.as_ptr(), frame.len() / 3) }, PLUMAGE_STATUS_OK);
+    assert_eq!(unsafe { plumage_system_seek(sys, 9, &mut from) }, PLUMAGE_STATUS_OK);
+    assert_eq!(from, 5, "forward within the playback: stay and replay from here");
+    assert_eq!(unsafe { plumage_system_seek(null_mut(), 3, &mut from) }, PLUMAGE_STATUS_NULL_POINTER);
+    unsafe { plumage_system_destroy(sys) };
+}

@@ -111,6 +111,7 @@ PlumageConfig make_config(const Options& opt) {
     }
     if (opt.mode) cfg.mode = *opt.mode;
     if (opt.drift_tolerance_deg) cfg.drift_tolerance = static_cast<float>(*opt.drift_tolerance_deg * kPi / 180.0);
+    if (opt.settle_rate_deg) cfg.settle_rate = static_cast<float>(*opt.settle_rate_deg * kPi / 180.0);
     if (opt.curvature_min_scale) cfg.curvature_min_scale = *opt.curvature_min_scale;
     if (opt.shaft_segments) cfg.shaft_segments = *opt.shaft_segments;
     if (opt.bend_limit_deg) cfg.bend_limit = static_cast<float>(*opt.bend_limit_deg * kPi / 180.0);

@@ -100,7 +100,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report", "--poses",
-                                           "--model-resolution", "--drift-tolerance", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
+                                           "--model-resolution", "--drift-tolerance", "--settle-rate", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
         if (option == o) return true;
@@ -150,6 +150,8 @@ std::string usage_text() {
            "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
            "  --drift-tolerance DEG   incremental: how far a feather may drift before it is readjusted (default 17.2;\n"
            "                       every moved feather is checked exactly each frame); at most 2.86 (theta_s) = the paper's rule\n"
+           "  --settle-rate DEG    incremental: most a readjusted feather settles toward its solved pose in a frame\n"
+           "                       (default 2; 0 = at once); lifting clear of a collision is never delayed\n"
            "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
            "                       (default 0.4; 1 = uniform spacing)\n"
            "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
@@ -220,6 +222,7 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--mode") {
             o.mode = parse_choice(arg, value, {"incremental", "legacy", "rebuild"}, {PLUMAGE_MODE_INCREMENTAL, PLUMAGE_MODE_LEGACY, PLUMAGE_MODE_REBUILD});
         } else if (arg == "--drift-tolerance") o.drift_tolerance_deg = parse_float(arg, value);
+        else if (arg == "--settle-rate") o.settle_rate_deg = parse_float(arg, value);
         else if (arg == "--curvature-min-scale") o.curvature_min_scale = parse_float(arg, value);
         else if (arg == "--fluffiness") o.fluffiness_deg = parse_float(arg, value);
         else if (arg == "--preset") o.preset = parse_choice(arg, value, {"feathers", "scales"}, {PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SCALES});

@@ -38,6 +38,7 @@ struct Options {
     std::optional<std::array<float, 3>> flow_source;
     std::optional<uint32_t> mode;
     std::optional<float> drift_tolerance_deg;
+    std::optional<float> settle_rate_deg;
     std::optional<float> curvature_min_scale;
     std::optional<uint32_t> preset;
     std::optional<uint32_t> shaft_segments;

@@ -129,6 +129,7 @@ json config_to_json(const PlumageConfig& c) {
               {"collision_allowance", tidy(c.collision_allowance)},
               {"theta_s", tidy(c.theta_s)},
               {"drift_tolerance", tidy(c.drift_tolerance)},
+              {"settle_rate", tidy(c.settle_rate)},
               {"curvature_min_scale", tidy(c.curvature_min_scale)},
               {"shaft_segments", c.shaft_segments},
               {"bend_limit", tidy(c.bend_limit)},

@@ -4,11 +4,61 @@
 //! that flicks by more than a few degrees in one frame at once, even when
 //! each frame on its own is collision-free. The pose is relative to the
 //! root's frame, so a rigid motion of the body changes nothing here.
+//!
+//! Where the pops came from (built-in swim, 2 000 feathers, 60 frames,
+//! frame 0 included, incremental with the default drift tolerance, before
+//! any settling): 2.93 % of the feathers a frame, 3 512 pops in all. 54 %
+//! were drift re-seeds (feathers readjusted because their surroundings had
+//! drifted past the drift tolerance) jumping to their solved pose, three in
+//! four of them down (the snap back to the ideal pose); 46 % were feathers
+//! failing their exact check (an obstacle moved into them, or a reversal
+//! in the order gave them a new obstacle) and readjusted from scratch, six
+//! in seven of them up, often by far more than the collision needed. A
+//! feather pulled in only by propagation never popped, and 111 of the pops
+//! were rolls. The 2 057 priority reversals of the clip act only through
+//! those exact checks.
+//!
+//! So the incremental mode settles instead of snapping
+//! (`Config::settle_rate`, default 2° a frame; see
+//! [`crate::adjustment::Adjuster::settle_next_run`]): a readjusted
+//! feather moves from its current pose toward its solved pose by at most
+//! the rate in pitch, roll and each bend, if that pose passes the exact
+//! checks; if not, it lifts from there by the smallest clear step, and only
+//! as a last resort takes the solved pose. Collision-free stays the rule of
+//! every frame; a feather held back is readjusted again the next frame
+//! ([`crate::coat::Coat::settling`]) until it reaches its solved pose. Its
+//! obstacles' sinking is judged by the solved pose, so the feathers lying on
+//! a settling feather settle with it. Measured after (same clip): 0.17 %
+//! a frame over 60 frames (0.04 % checking held poses without the
+//! obstacles' tops, as now); over 600 frames 0.034 % a frame (max 0.30 %),
+//! 0 intersecting pairs, mean pitch at most 1.89° over rebuild's in any
+//! frame (without settling: 3.61 % pops, up to 3.10° over rebuild's, more
+//! than 2° in 360 frames). A lower drift tolerance tracks rebuild closer
+//! without popping now, at the cost of more readjustments: 10° up to
+//! 1.05°, 5° up to 0.40° (0.04 % pops either way).
 
 use crate::feather::FeatherPose;
 
 /// Default pop threshold: 5° (radians).
 pub const DEFAULT_POP_THRESHOLD: f32 = 5.0 * std::f32::consts::PI / 180.0;
+
+/// Default settle rate: 2° a frame (radians).
+pub const DEFAULT_SETTLE_RATE: f32 = 2.0 * std::f32::consts::PI / 180.0;
+
+/// `from` moved toward `to` by at most `rate` radians in pitch, roll and
+/// each bend; the size is `to`'s. A feather that was not shown (size 0)
+/// takes `to` at once.
+pub fn toward(from: &FeatherPose, to: &FeatherPose, rate: f32) -> FeatherPose {
+    if from.scale <= 0.0 || to.scale <= 0.0 {
+        return *to;
+    }
+    let step = |a: f32, b: f32| if (b - a).abs() <= rate { b } else { a + rate.copysign(b - a) };
+    let mut pose = FeatherPose::new(step(from.pitch, to.pitch), step(from.roll, to.roll)).with_scale(to.scale);
+    for (k, b) in pose.bends.iter_mut().enumerate() {
+        *b = step(from.bends[k], to.bends[k]);
+    }
+    pose
+}
 
 /// The pose changes of one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -51,5 +101,19 @@ mod tests {
         assert_eq!(c.pops, 2);
         assert!((c.largest - 0.3).abs() < 1e-6);
         assert_eq!(pose_changes(&before, &before, DEFAULT_POP_THRESHOLD), PoseChanges::default());
+    }
+
+    #[test]
+    fn toward_moves_each_angle_by_at_most_the_rate() {
+        let mut from = FeatherPose::new(0.5, -0.1);
+        from.bends[0] = -0.2;
+        let mut to = FeatherPose::new(0.1, -0.08).with_scale(0.85);
+        to.bends[0] = 0.3;
+        let p = toward(&from, &to, 0.05);
+        assert!((p.pitch - 0.45).abs() < 1e-6 && p.roll == -0.08 && (p.bends[0] + 0.15).abs() < 1e-6);
+        assert_eq!(p.scale, 0.85);
+        assert!(pose_change(&from, &p) <= 0.05 + 1e-6);
+        assert_eq!(toward(&from, &to, 10.0), to);
+        assert_eq!(toward(&from.with_scale(0.0), &to, 0.05), to);
     }
 }

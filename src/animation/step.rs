@@ -131,6 +131,10 @@ pub fn step_coat(
     } else {
         coat.staleness.add(&step.displacement, drift_limit, &mut step.seeds);
     }
+    // Feathers still settling toward their solved pose go on (incremental).
+    if incremental && coat.settling.len() == n {
+        step.seeds.iter_mut().zip(&coat.settling).for_each(|(s, &settling)| *s |= settling);
+    }
     step.r_k.clear();
     step.r_k.extend((0..n as u32).filter(|&i| coat.staleness.moved()[i as usize] > limit(i as usize)));
     // The second pass's buffers, sized now: the first frame that needs
@@ -172,6 +176,8 @@ pub fn step_coat(
         let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
         let full = CandidateLists::new(offsets, indices);
         work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
+        let settle_rate = if incremental { dressing.settle_rate } else { 0.0 };
+        work.adjuster.settle_next_run(settle_rate);
         let stats = pass.run(
             Walk::Levels,
             &mut work.adjuster,
@@ -184,6 +190,8 @@ pub fn step_coat(
         // A stopped adjustment (None) has set the progress's stop flag.
         progress.check(Phase::Adjusting, 1.0)?;
         let mut stats = stats.unwrap_or_default();
+        coat.settling.clear();
+        coat.settling.extend_from_slice(work.adjuster.settling());
         let missed = step.contacts.missed(
             &coat.frames,
             &dressing.shapes,
@@ -203,6 +211,7 @@ pub fn step_coat(
             step.verified.extend_from_slice(work.adjuster.verified());
             step.no_suspects.clear();
             step.no_suspects.resize(n, false);
+            work.adjuster.settle_next_run(settle_rate);
             let more = pass.run(
                 Walk::Sparse,
                 &mut work.adjuster,
@@ -214,6 +223,8 @@ pub fn step_coat(
             );
             progress.check(Phase::Adjusting, 1.0)?;
             let more = more.unwrap_or_default();
+            let again = work.adjuster.adjusted().iter().zip(work.adjuster.settling());
+            coat.settling.iter_mut().zip(again).filter(|(_, (a, _))| **a).for_each(|(s, (_, &b))| *s = b);
             for (a, &b) in step.adjusted.iter_mut().zip(work.adjuster.adjusted()) {
                 *a |= b;
             }

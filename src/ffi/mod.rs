@@ -753,6 +753,37 @@ pub unsafe extern "C" fn plumage_system_load_state(sys: *mut PlumageSystem, blob
     })
 }
 
+/// Scrubbing with keyframed checkpoints (`PlumageConfig.checkpoint_interval`
+/// K > 0: after create and every K-th step of the playback the system keeps
+/// its state blob in memory, at most `checkpoint_cap` besides the first).
+/// Prepares the system to reach the state after `frame_index` steps and
+/// writes to `*out_from` the frame count it now stands at: the caller then
+/// steps it with the positions of frames `*out_from` .. `frame_index` − 1
+/// of its clip (step k takes the clip's frame k) and gets byte for byte
+/// what playback gave. Seeking forward within the playback keeps the
+/// current frame; otherwise the nearest checkpoint at or before
+/// `frame_index` is loaded. After `plumage_system_evaluate` or
+/// `plumage_system_load_state` no checkpoints are kept until a seek.
+/// Checkpoints off: PLUMAGE_STATUS_INVALID_ARGUMENT. On any error the
+/// system is exactly as it was.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `out_from` is NULL or points to a writable
+/// `uint64_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_seek(sys: *mut PlumageSystem, frame_index: u64, out_from: *mut u64) -> u32 {
+    with_system(sys, |system, _| {
+        if out_from.is_null() {
+            return Err(Failure::null("out_from"));
+        }
+        let from = system.seek(frame_index)?;
+        // SAFETY: non-NULL, points to a writable uint64_t (contract).
+        unsafe { *out_from = from };
+        Ok(())
+    })
+}
+
 fn not_available(what: &str) -> Failure {
     Failure::new(PLUMAGE_STATUS_NOT_AVAILABLE, format!("{what} are not available: this system has no feathers yet"))
 }

@@ -128,6 +128,20 @@ pub struct PlumageConfig {
     pub parallel_for: PlumageParallelForFn,
     /// Passed back to `parallel_for` unchanged as `host_context`.
     pub parallel_for_context: *mut c_void,
+    /// Incremental mode: the most a readjusted feather's pose relative to
+    /// its root (pitch, roll, a bend) moves toward its newly solved pose in
+    /// one frame (radians, default 2°; 0 = the solved pose at once). A
+    /// feather that must lift to stay clear lifts at once; settling down is
+    /// spread over frames, so the coat does not pop.
+    pub settle_rate: f32,
+    /// Scrubbing: every this many steps (and after create) the system
+    /// keeps its state blob in memory, so `plumage_system_seek` can go back
+    /// to the nearest one and the caller replays from there (default 0:
+    /// none kept). Changes no result.
+    pub checkpoint_interval: u32,
+    /// Most checkpoints kept besides the one after create (default 64, at
+    /// least 1); past it the oldest is dropped.
+    pub checkpoint_cap: u32,
 }
 
 /// One task of a parallel section, handed to the host's parallel-for:
@@ -322,6 +336,9 @@ impl PlumageConfig {
             pop_threshold: c.pop_threshold,
             parallel_for: None,
             parallel_for_context: std::ptr::null_mut(),
+            settle_rate: c.settle_rate,
+            checkpoint_interval: c.checkpoint_interval,
+            checkpoint_cap: c.checkpoint_cap,
         }
     }
 
@@ -361,6 +378,7 @@ impl PlumageConfig {
             self.length_per_spacing,
             self.width_per_spacing,
             self.pop_threshold,
+            self.settle_rate,
         ];
         if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
             return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
@@ -396,6 +414,9 @@ impl PlumageConfig {
             length_per_spacing: self.length_per_spacing,
             width_per_spacing: self.width_per_spacing,
             pop_threshold: self.pop_threshold,
+            settle_rate: self.settle_rate,
+            checkpoint_interval: self.checkpoint_interval,
+            checkpoint_cap: self.checkpoint_cap,
         };
         cfg.validate()?;
         Ok(cfg)

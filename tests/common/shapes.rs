@@ -89,3 +89,70 @@ pub fn thin_box(w: f32, h: f32, t: f32, nx: usize, ny: usize) -> Shape {
     }
     s
 }
+
+/// The C++ host's built-in model (`cpp_examples/gltf_host/procedural_model.cpp`)
+/// ported: a body 4 long along x swimming with a wave travelling to the
+/// tail, `rings` cross-sections of `segments` vertices (seam duplicated)
+/// and two poles. [`swim_pose`] gives its positions at time `t` seconds
+/// (period 1 s; the wave fades in over the first half second).
+pub fn swim_body(rings: usize, segments: usize) -> Shape {
+    let ring_size = (segments + 1) as u32;
+    let vertex = |ring: usize, seg: usize| (ring - 1) as u32 * ring_size + seg as u32;
+    let head = (rings - 1) as u32 * ring_size;
+    let tail = head + 1;
+    let mut indices = Vec::new();
+    for i in 1..rings - 1 {
+        for j in 0..segments {
+            let (a, b) = (vertex(i, j), vertex(i, j + 1));
+            if i == 1 {
+                indices.extend_from_slice(&[head, a, b]);
+            }
+            if i + 2 < rings {
+                let (c, d) = (vertex(i + 1, j), vertex(i + 1, j + 1));
+                indices.extend_from_slice(&[a, c, d, a, d, b]);
+            } else {
+                indices.extend_from_slice(&[a, tail, b]);
+            }
+        }
+    }
+    Shape { positions: swim_pose(rings, segments, 0.0), indices }
+}
+
+/// The positions of [`swim_body`] at time `t` seconds.
+pub fn swim_pose(rings: usize, segments: usize, t: f64) -> Vec<f32> {
+    use std::f64::consts::PI;
+    let (length, body_radius, wavelength, period) = (4.0f64, 0.45, 0.8, 1.0);
+    let radius = |u: f64| body_radius * (PI * u).sin().max(0.0).sqrt() * (1.0 - 0.5 * u);
+    let amplitude = |u: f64| 0.05 + 0.35 * u * u;
+    let s = (t / 0.5).clamp(0.0, 1.0);
+    let env = s * s * (3.0 - 2.0 * s);
+    let centre = |u: f64| {
+        let phase = 2.0 * PI * (u / wavelength - t / period);
+        let w = env * amplitude(u) * phase.sin();
+        let dw = env * (0.7 * u * phase.sin() + amplitude(u) * phase.cos() * 2.0 * PI / wavelength);
+        let n = length.hypot(dw);
+        (length * u, w, length / n, dw / n)
+    };
+    let ring_size = segments + 1;
+    let mut xyz = vec![0.0f32; ((rings - 1) * ring_size + 2) * 3];
+    for i in 1..rings - 1 {
+        let u = i as f64 / rings as f64;
+        let (x, w, tx, tz) = centre(u);
+        let r = radius(u);
+        for j in 0..=segments {
+            let phi = 2.0 * PI * (j % segments) as f64 / segments as f64;
+            let (side, up) = (r * phi.cos(), 0.8 * r * phi.sin());
+            let v = ((i - 1) * ring_size + j) * 3;
+            xyz[v] = (x - side * tz) as f32;
+            xyz[v + 1] = up as f32;
+            xyz[v + 2] = (w + side * tx) as f32;
+        }
+    }
+    let poles = (rings - 1) * ring_size * 3;
+    for end in 0..2 {
+        let (x, w, _, _) = centre(end as f64);
+        xyz[poles + 3 * end] = x as f32;
+        xyz[poles + 3 * end + 2] = w as f32;
+    }
+    xyz
+}

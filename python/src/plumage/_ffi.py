@@ -70,6 +70,9 @@ class Config(ctypes.Structure):
         ("pop_threshold", c_float),
         ("parallel_for", ParallelForFn),
         ("parallel_for_context", c_void_p),
+        ("settle_rate", c_float),
+        ("checkpoint_interval", c_uint32),
+        ("checkpoint_cap", c_uint32),
     ]
 
 
