@@ -59,6 +59,12 @@ pub struct Dressing {
     pub recompute_neighbourhoods: bool,
     /// The incremental mode's settle rate (`Config::settle_rate`).
     pub settle_rate: f32,
+    /// The connected part of the surface each triangle belongs to, and the
+    /// number of parts ([`Surface::face_components`]): skin of another
+    /// part near a feather is watched each frame (see
+    /// `animation::step`).
+    pub face_part: Vec<u32>,
+    pub parts: usize,
 }
 
 impl Dressing {
@@ -67,6 +73,7 @@ impl Dressing {
     /// of `config`.
     pub fn new(surface: Surface, mesh: &WeldedMesh, roots: Vec<RootBinding>, config: &Config) -> Self {
         let shapes = Self::shapes_for(&roots, config);
+        let (face_part, parts) = surface.face_components();
         Self {
             surface,
             triangles: mesh.triangles.clone(),
@@ -84,6 +91,8 @@ impl Dressing {
             drift_tolerance: config.drift_tolerance,
             recompute_neighbourhoods: config.recompute_neighbourhoods,
             settle_rate: config.settle_rate,
+            face_part,
+            parts,
         }
     }
 

@@ -45,7 +45,7 @@ use super::contact::{Contacts, Footprint, Sphere};
 use super::motion::{Oriented, Placement, RootMap, orientation, root_maps};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
-use crate::body::BodyIndex;
+use crate::body::{Aabb, BodyIndex};
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::error::Result;
 use crate::feather::FeatherPose;
@@ -53,6 +53,7 @@ use crate::geometry::RootFrame;
 use crate::ordering::{Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
 use crate::stats::FrameReport;
+use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -60,6 +61,29 @@ use std::time::Instant;
 /// below which it is taken for rounding noise (a rigid motion) and the
 /// feather is not checked.
 const MOVED_AT_ALL: f32 = 1e-6;
+
+/// Marks as suspects (checked exactly this frame, skin included) the
+/// feathers that skin of another connected part of the surface comes
+/// within a feather length of. Their own surroundings may not have moved
+/// at all (a tube closing on another moves rigidly with its feathers), so
+/// nothing else would look at them, and the other part's skin could sweep
+/// into them unseen. One box query per feather not already a suspect, and
+/// only when the surface has several parts.
+fn watch_other_parts(coat: &Coat, dressing: &Dressing, suspects: &mut [bool], ids: &mut Vec<u32>) {
+    if dressing.parts < 2 {
+        return;
+    }
+    for (i, suspect) in suspects.iter_mut().enumerate() {
+        if *suspect || coat.poses[i].scale <= 0.0 {
+            continue;
+        }
+        let own = dressing.face_part[dressing.roots[i].point.face as usize];
+        let reach = Vec3::splat(dressing.shapes[i].length * coat.poses[i].scale);
+        let root = coat.frames[i].position;
+        coat.body.triangles_in_box(&Aabb { min: root - reach, max: root + reach }, ids);
+        *suspect = ids.iter().any(|&t| dressing.face_part[t as usize] != own);
+    }
+}
 
 /// Buffers of the frame update, reused every frame.
 #[derive(Debug, Default)]
@@ -78,6 +102,7 @@ pub struct StepWorkspace {
     no_suspects: Vec<bool>,
     verified: Vec<bool>,
     r_k: Vec<u32>,
+    body_ids: Vec<u32>,
     contacts: Contacts,
     adjusted: Vec<bool>,
 }
@@ -167,6 +192,9 @@ pub fn step_coat(
 
     // 4. Readjust R*_k in order, propagating past θs.
     coat.body.rebuild(&coat.positions, &dressing.triangles);
+    if verify {
+        watch_other_parts(coat, dressing, &mut step.suspects, &mut step.body_ids);
+    }
     let steps = if dressing.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
     let stats = if n == 0 {
         AdjustStats::default()

@@ -123,6 +123,46 @@ impl Surface {
         }
     }
 
+    /// The connected part of the surface each face belongs to (faces
+    /// sharing a vertex are connected), numbered from 0 in the order of
+    /// their first face; and the number of parts.
+    pub fn face_components(&self) -> (Vec<u32>, usize) {
+        // Union-find over the vertices, halving paths.
+        let mut parent: Vec<u32> = (0..self.vertex_count as u32).collect();
+        fn find(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                let up = parent[parent[v as usize] as usize];
+                parent[v as usize] = up;
+                v = up;
+            }
+            v
+        }
+        for t in &self.triangles {
+            let a = find(&mut parent, t[0]);
+            for &v in &t[1..] {
+                let b = find(&mut parent, v);
+                if a != b {
+                    parent[b as usize] = a;
+                }
+            }
+        }
+        let mut label = vec![u32::MAX; self.vertex_count];
+        let mut parts = 0u32;
+        let faces = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let r = find(&mut parent, t[0]) as usize;
+                if label[r] == u32::MAX {
+                    label[r] = parts;
+                    parts += 1;
+                }
+                label[r]
+            })
+            .collect();
+        (faces, parts as usize)
+    }
+
     /// Number of welded vertices.
     pub fn vertex_count(&self) -> usize {
         self.vertex_count
