@@ -19,7 +19,7 @@ use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
-use crate::validation::{ProbeSkin, validate};
+use crate::validation::{ProbeSkin, validate_with_progress};
 use glam::Vec3;
 
 /// Probes per feather for the coverage figure of [`System::validate`].
@@ -63,8 +63,10 @@ impl System {
         progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
+        progress.check(Phase::Preparing, 0.3)?;
         let pool = WorkerPool::new(config.threads)?;
         let surface = Surface::new(&welded);
+        progress.check(Phase::Preparing, 0.6)?;
         let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
         let fields = Fields::new(
             &welded,
@@ -209,6 +211,12 @@ impl System {
 
     /// Exact validation of the current feathers (DESIGN.md §6).
     pub fn validate(&self) -> Option<ValidationReport> {
+        self.validate_with_progress(&Progress::none()).expect("validation without a progress sink is never interrupted")
+    }
+
+    /// As [`System::validate`], reporting to `progress`, which may stop it
+    /// (`Interrupted`; validation never changes the system).
+    pub fn validate_with_progress(&self, progress: &Progress) -> Result<Option<ValidationReport>> {
         self.maybe_test_panic();
         let n = self.dressing.len();
         let probes = (COVERAGE_PROBES_PER_FEATHER * n).clamp(COVERAGE_PROBES_MIN, COVERAGE_PROBES_MAX);
@@ -228,7 +236,7 @@ impl System {
             .collect();
         let c = &self.coat;
         let v = self.pool.install(|| {
-            validate(
+            validate_with_progress(
                 &tris,
                 &c.frames,
                 &self.dressing.shapes,
@@ -241,9 +249,10 @@ impl System {
                 },
                 probes,
                 self.config.seed,
+                progress,
             )
-        });
-        Some(ValidationReport {
+        })?;
+        Ok(Some(ValidationReport {
             intersecting_pairs: v.intersecting_pairs.len(),
             body_penetrations: v.body_penetrations.len(),
             coverage: v.coverage,
@@ -253,7 +262,7 @@ impl System {
             tip_height_median: v.tip_heights.median,
             tip_height_p90: v.tip_heights.p90,
             bristle_percent: v.tip_heights.bristle_percent,
-        })
+        }))
     }
 
     /// Advances to the next animation frame by the system's mode. On error

@@ -185,12 +185,18 @@ fn case(rng: &mut Rng, tally: &mut Tally) {
     let use_defaults = rng.chance(0.02) && m.positions.len() < 90;
     if std::env::var_os("PLUMAGE_FUZZ_DEBUG").is_some() {
         eprintln!("mesh {:?}\nindices {:?}\nconfig {cfg:?}\ndesc {d:?}", m.positions, m.indices);
+        for (k, map) in maps.iter().enumerate() {
+            eprintln!("map {k} {map:?}");
+        }
     }
     let Some(handle) = fuzz::create(tally, if use_defaults { None } else { Some(&cfg) }, &d) else { return };
     let sys = handle.0;
     let mut count = 0usize;
     tally.saw("feather_count", unsafe { plumage_system_feather_count(sys, &mut count) });
     assert!(count <= PLUMAGE_MAX_FEATHERS as usize);
+    if std::env::var_os("PLUMAGE_FUZZ_DEBUG").is_some() {
+        eprintln!("created {count} feathers");
+    }
     fuzz::assert_finite(sys, "after create");
     let mut v = std::mem::MaybeUninit::<PlumageValidation>::zeroed();
     unsafe { (*v.as_mut_ptr()).struct_size = std::mem::size_of::<PlumageValidation>() as u32 };
