@@ -231,6 +231,20 @@ mod tests {
     }
 
     #[test]
+    fn a_ray_tests_each_triangle_once_and_the_next_ray_again() {
+        let mut stamps = RayStamps { stamp: u32::MAX - 1, marks: Vec::new() };
+        let first = stamps.next(3);
+        assert!(stamps.first_visit(2, first) && !stamps.first_visit(2, first), "once per ray");
+        // The stamp wraps past zero: the marks are cleared, nothing is skipped.
+        let second = stamps.next(3);
+        assert_eq!(second, 1, "after the wrap");
+        assert!(stamps.first_visit(2, second) && !stamps.first_visit(2, second));
+        // More triangles than before: the new ones are unmarked too.
+        let third = stamps.next(5);
+        assert!((0..5).all(|t| stamps.first_visit(t, third)), "a new ray sees every triangle afresh");
+    }
+
+    #[test]
     fn skin_inside_another_part_is_buried() {
         let (pos, tris) = box_and_slab();
         let body = BodyIndex::from_mesh(&pos, &tris);
