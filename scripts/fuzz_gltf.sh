@@ -65,10 +65,10 @@ if ! "$cxx" "${flags[@]}" "${objects[@]}" -o "$fuzzer" 2>"$out/build.log"; then
   exit 1
 fi
 
-cp -n cpp_examples/fuzz/corpus/* "$out/corpus/"
-if compgen -G "cpp_examples/fuzz/regressions/*" >/dev/null; then
-  cp -n cpp_examples/fuzz/regressions/* "$out/corpus/"
-fi
+# Seed the working corpus (files already there are kept as they are).
+for seed in cpp_examples/fuzz/corpus/* cpp_examples/fuzz/regressions/*; do
+  [ -f "$seed" ] && [ ! -e "$out/corpus/$(basename "$seed")" ] && cp "$seed" "$out/corpus/"
+done
 log="$out/last_run.log"
 status=0
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 "$fuzzer" \
