@@ -5,10 +5,14 @@
 #   scripts/fuzz_gltf.sh              # 30 s (what scripts/test.sh runs, with 20)
 #   scripts/fuzz_gltf.sh 3600         # an hour
 #   scripts/fuzz_gltf.sh --runs 1000000
+#   PLUMAGE_FUZZ_MODELS=1 scripts/fuzz_gltf.sh 600   # also mutate the animated test models
 #
 # Builds build-fuzz/gltf_fuzzer (tinygltf compiled in, so its parser is
 # instrumented too), then fuzzes a working corpus in build-fuzz/corpus
 # seeded from cpp_examples/fuzz/corpus and cpp_examples/fuzz/regressions.
+# With PLUMAGE_FUZZ_MODELS=1 the working corpus is build-fuzz/corpus-models,
+# seeded also with the test models (../shared/data or $PLUMAGE_DATA_DIR, read
+# at run time, never copied into the repository), inputs up to 1 MiB.
 # A crash, sanitizer report, leak, timeout (10 s an input) or allocation
 # beyond 2 GB stops the run with its input saved as
 # build-fuzz/crashes/crash-*: fix the bug, then keep the input in
@@ -65,20 +69,31 @@ if ! "$cxx" "${flags[@]}" "${objects[@]}" -o "$fuzzer" 2>"$out/build.log"; then
   exit 1
 fi
 
+corpus="$out/corpus"
+max_len=65536
+seeds=(cpp_examples/fuzz/corpus/* cpp_examples/fuzz/regressions/*)
+if [ "${PLUMAGE_FUZZ_MODELS:-0}" = 1 ]; then
+  corpus="$out/corpus-models"
+  max_len=1048576
+  data="${PLUMAGE_DATA_DIR:-../shared/data}"
+  compgen -G "$data/*.glb" >/dev/null || { echo "gltf fuzz: PLUMAGE_FUZZ_MODELS=1 but no .glb in $data" >&2; exit 1; }
+  seeds+=("$data"/*.glb)
+fi
+mkdir -p "$corpus"
 # Seed the working corpus (files already there are kept as they are).
-for seed in cpp_examples/fuzz/corpus/* cpp_examples/fuzz/regressions/*; do
-  [ -f "$seed" ] && [ ! -e "$out/corpus/$(basename "$seed")" ] && cp "$seed" "$out/corpus/"
+for seed in "${seeds[@]}"; do
+  [ -f "$seed" ] && [ ! -e "$corpus/$(basename "$seed")" ] && cp "$seed" "$corpus/"
 done
 log="$out/last_run.log"
 status=0
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 "$fuzzer" \
   -dict=cpp_examples/fuzz/gltf.dict -max_total_time="$seconds" -runs="$runs" \
-  -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len=65536 \
-  -artifact_prefix="$out/crashes/" -print_final_stats=1 "$out/corpus" >"$log" 2>&1 || status=$?
+  -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=2048 -max_len="$max_len" \
+  -artifact_prefix="$out/crashes/" -print_final_stats=1 "$corpus" >"$log" 2>&1 || status=$?
 ran=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
 if [ "$status" -ne 0 ]; then
   tail -60 "$log" >&2
   echo "gltf fuzz: FAILED after ${ran:-?} inputs; the input is in $out/crashes/ (full log $log)" >&2
   exit 1
 fi
-echo "gltf fuzz: ${ran:-?} inputs, no crash, no sanitizer report ($(ls "$out/corpus" | wc -l) in the working corpus; log $log)"
+echo "gltf fuzz: ${ran:-?} inputs, no crash, no sanitizer report ($(ls "$corpus" | wc -l) in the working corpus; log $log)"
