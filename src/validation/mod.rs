@@ -52,7 +52,6 @@ pub struct Validation {
 /// coverage probes are drawn on `skin`, usually the body at the same pose;
 /// `probes` probe points are drawn with `seed`.
 #[allow(clippy::too_many_arguments)]
-#[allow(clippy::too_many_arguments)]
 pub fn validate(
     feather_triangles: &[FeatherTriangles],
     frames: &[RootFrame],
