@@ -241,6 +241,11 @@
 #define PLUMAGE_PHASE_ADJUSTING 3
 
 /**
+ * Progress phase: `plumage_system_validate`'s exact checks.
+ */
+#define PLUMAGE_PHASE_VALIDATING 4
+
+/**
  * Most feathers a system may hold: a larger `target_feathers`, or a
  * `spacing` that would plant more, is refused with
  * PLUMAGE_STATUS_LIMIT_EXCEEDED before anything large is allocated.
@@ -272,7 +277,7 @@ typedef struct PlumageSystem PlumageSystem;
  * leaves the system as it was before the call (a stopped create creates
  * nothing). It is called at least every few milliseconds while the library
  * works, never from two threads at once: with `threads = 1` always on the
- * thread that made the call (create, step or evaluate); with more threads
+ * thread that made the call (create, step, evaluate or validate); with more threads
  * on that thread or on one of the system's worker threads. It must not
  * call back into the same system.
  */
@@ -1276,7 +1281,9 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
 /**
  * Runs the exact validation (triangle–triangle intersections, body
  * penetrations, coverage, mean pitch) on the current feathers. Only reads
- * the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+ * the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist. Reports
+ * PLUMAGE_PHASE_VALIDATING to the system's progress callback, which may stop
+ * it (PLUMAGE_STATUS_INTERRUPTED, no result written).
  *
  * # Safety
  * `sys` is NULL or a live handle from `plumage_system_create`; other threads

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Makes sure the build tools are present: cargo (must already be installed),
-# cmake, g++, pkg-config and Debian's libtinygltf-dev. Installs the missing
+# cmake, g++, pkg-config and Debian's libtinygltf-dev (and clang when it can). Installs the missing
 # Debian packages when run as root with apt-get; otherwise stops and prints
 # the exact command to run.
 set -euo pipefail
@@ -23,6 +23,12 @@ if command -v python3 >/dev/null 2>&1; then
   venv_probe=$(mktemp -d)
   python3 -m venv "$venv_probe/v" >/dev/null 2>&1 || missing+=(python3-venv)
   rm -rf "$venv_probe"
+fi
+
+# clang with libFuzzer runs the glTF reader's fuzz target (scripts/fuzz_gltf.sh);
+# optional: without it that step is a counted skip.
+if ! command -v clang++ >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  missing+=(clang)
 fi
 
 if [ ${#missing[@]} -gt 0 ]; then

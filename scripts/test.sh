@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test: the Rust tests (unit, integration, header drift), then the
 # C++ tests under ctest, in a normal build and in an ASan+UBSan build, and the
-# installed library from a separate consumer project (scripts/consumer_test.sh).
+# installed library from a separate consumer project (scripts/consumer_test.sh),
+# and a short libFuzzer run over the host's glTF reader (scripts/fuzz_gltf.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-deps.sh
@@ -31,6 +32,15 @@ if [ "$py_status" -ne 0 ]; then
   # 5 = pytest collected no test: a failure here, never a pass
   echo "error: pytest exited with $py_status" >&2
   exit "$py_status"
+fi
+
+echo "== glTF reader fuzzing (libFuzzer, ASan+UBSan), 20 s"
+fuzz_status=0
+scripts/fuzz_gltf.sh 20 || fuzz_status=$?
+if [ "$fuzz_status" -eq 77 ]; then
+  echo "SKIPPED (1): the glTF fuzz run: clang with libFuzzer is not installed"
+elif [ "$fuzz_status" -ne 0 ]; then
+  exit "$fuzz_status"
 fi
 
 echo "== C++ build and ctest under AddressSanitizer + UndefinedBehaviorSanitizer"

@@ -98,24 +98,65 @@ impl<'a> BodyInterior<'a> {
     /// Triangles leaving the body along the ray less triangles entering it
     /// (each triangle counted once; one whose plane holds the ray counts
     /// for neither).
+    ///
+    /// Each triangle is tested once per ray however many cells it spans
+    /// (a stamp per triangle, per thread): a soup of large faces crossing
+    /// one another, or a few huge faces among tiny ones, otherwise tested
+    /// the same face in every cell the ray walked.
     fn winding_along_ray(&self, origin: Vec3, dir: Vec3) -> i32 {
         let grid = self.body.grid();
-        let mut crossed: Vec<u32> = Vec::new();
-        grid.ray_cast(origin, dir, f32::INFINITY, |t| {
-            if ray_triangle(origin, dir, grid.corners(t)).is_some() {
-                crossed.push(t);
-            }
-            None
-        });
-        crossed.sort_unstable();
-        crossed.dedup();
-        crossed
-            .iter()
-            .map(|&t| self.body.normal(t).dot(dir))
-            .filter(|c| c.is_finite() && *c != 0.0)
-            .map(|c| c.signum() as i32)
-            .sum()
+        RAY_STAMPS.with(|stamps| {
+            let mut stamps = stamps.borrow_mut();
+            let stamp = stamps.next(grid.len());
+            let mut winding = 0;
+            grid.ray_cast(origin, dir, f32::INFINITY, |t| {
+                if stamps.first_visit(t, stamp) && ray_triangle(origin, dir, grid.corners(t)).is_some() {
+                    let c = self.body.normal(t).dot(dir);
+                    if c.is_finite() && c != 0.0 {
+                        winding += c.signum() as i32;
+                    }
+                }
+                None
+            });
+            winding
+        })
     }
+}
+
+/// Per-thread marks of the triangles one ray has tested: `marks[t] ==
+/// stamp` once triangle `t` was tested by the current ray.
+struct RayStamps {
+    stamp: u32,
+    marks: Vec<u32>,
+}
+
+impl RayStamps {
+    /// A fresh stamp for a new ray over `triangles` triangles.
+    fn next(&mut self, triangles: usize) -> u32 {
+        if self.marks.len() < triangles {
+            self.marks.resize(triangles, 0);
+        }
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.marks.fill(0);
+            self.stamp = 1;
+        }
+        self.stamp
+    }
+
+    /// Whether triangle `t` is seen for the first time by the ray `stamp`
+    /// (and marks it).
+    #[inline]
+    fn first_visit(&mut self, t: u32, stamp: u32) -> bool {
+        let mark = &mut self.marks[t as usize];
+        let first = *mark != stamp;
+        *mark = stamp;
+        first
+    }
+}
+
+thread_local! {
+    static RAY_STAMPS: std::cell::RefCell<RayStamps> = const { std::cell::RefCell::new(RayStamps { stamp: 0, marks: Vec::new() }) };
 }
 
 /// The buried part of a skin: each face's burial, and the winding test for
@@ -187,6 +228,20 @@ mod tests {
         pos.extend(slab_pos);
         tris.extend(slab_tris.iter().map(|t| t.map(|v| v + base)));
         (pos, tris)
+    }
+
+    #[test]
+    fn a_ray_tests_each_triangle_once_and_the_next_ray_again() {
+        let mut stamps = RayStamps { stamp: u32::MAX - 1, marks: Vec::new() };
+        let first = stamps.next(3);
+        assert!(stamps.first_visit(2, first) && !stamps.first_visit(2, first), "once per ray");
+        // The stamp wraps past zero: the marks are cleared, nothing is skipped.
+        let second = stamps.next(3);
+        assert_eq!(second, 1, "after the wrap");
+        assert!(stamps.first_visit(2, second) && !stamps.first_visit(2, second));
+        // More triangles than before: the new ones are unmarked too.
+        let third = stamps.next(5);
+        assert!((0..5).all(|t| stamps.first_visit(t, third)), "a new ray sees every triangle afresh");
     }
 
     #[test]

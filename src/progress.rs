@@ -18,6 +18,8 @@ pub enum Phase {
     Ordering,
     /// Height-field adjustment.
     Adjusting,
+    /// The exact validation of the current feathers.
+    Validating,
 }
 
 /// Receives progress; returns `false` to ask the running call to stop.

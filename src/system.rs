@@ -19,7 +19,7 @@ use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, PartReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
-use crate::validation::{ProbeSkin, Validation, validate, validate_part};
+use crate::validation::{ProbeSkin, Validation, validate_part, validate_with_progress};
 use glam::Vec3;
 use std::collections::BTreeMap;
 
@@ -81,11 +81,13 @@ impl System {
         progress.check(Phase::Preparing, 0.0)?;
         mesh.check()?;
         let welded = weld(mesh)?;
+        progress.check(Phase::Preparing, 0.3)?;
         let pool = match parallel_for {
             Some(host) => WorkerPool::with_parallel_for(config.threads, host)?,
             None => WorkerPool::new(config.threads)?,
         };
         let surface = Surface::new(&welded);
+        progress.check(Phase::Preparing, 0.6)?;
         let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
         let fields = Fields::new(
             &welded,
@@ -239,12 +241,18 @@ impl System {
 
     /// Exact validation of the current feathers (DESIGN.md §6).
     pub fn validate(&self) -> Option<ValidationReport> {
+        self.validate_with_progress(&Progress::none()).expect("validation without a progress sink is never interrupted")
+    }
+
+    /// As [`System::validate`], reporting to `progress`, which may stop it
+    /// (`Interrupted`; validation never changes the system).
+    pub fn validate_with_progress(&self, progress: &Progress) -> Result<Option<ValidationReport>> {
         self.maybe_test_panic();
         let n = self.dressing.len();
         let tris = self.feather_triangle_sets();
         let c = &self.coat;
         let v = self.pool.install(|| {
-            validate(
+            validate_with_progress(
                 &tris,
                 &c.frames,
                 &self.dressing.shapes,
@@ -257,9 +265,10 @@ impl System {
                 },
                 coverage_probes(n),
                 self.config.seed,
+                progress,
             )
-        });
-        Some(validation_report(&v))
+        })?;
+        Ok(Some(validation_report(&v)))
     }
 
     /// [`System::validate`] restricted to the part of the mesh made of the

@@ -155,14 +155,36 @@ fn bad_meshes_are_refused_with_their_own_status() {
     unsafe { plumage_system_destroy(out) };
 }
 
+/// Degenerate triangles (a repeated corner, one vertex thrice) among good
+/// ones are accepted and ignored: the feathers are those of the mesh
+/// without them, bit for bit, and a frame moves both systems alike.
 #[test]
 fn some_degenerate_triangles_among_good_ones_are_accepted() {
-    let (mut pos, mut idx) = grid_soup();
+    let (pos, idx) = grid_soup();
+    let (mut bad_pos, mut bad_idx) = (pos.clone(), idx.clone());
     let base = (pos.len() / 3) as u32;
-    pos.extend_from_slice(&[5., 5., 5., 5., 5., 5., 6., 5., 5.]);
-    idx.extend_from_slice(&[base, base + 1, base + 2, 0, 0, 0]);
-    let sys = create(&pos, &idx);
-    unsafe { plumage_system_destroy(sys) };
+    bad_pos.extend_from_slice(&[5., 5., 5., 5., 5., 5., 6., 5., 5.]);
+    bad_idx.extend_from_slice(&[base, base + 1, base + 2, 0, 0, 0]);
+    let (clean, degenerate) = (create(&pos, &idx), create(&bad_pos, &bad_idx));
+    let feathers = |sys: *mut PlumageSystem| {
+        let mut n = 0usize;
+        unsafe { plumage_system_feather_triangles(sys, null_mut(), 0, &mut n) };
+        let mut buf = vec![0f32; n];
+        let st = unsafe { plumage_system_feather_triangles(sys, buf.as_mut_ptr(), n, &mut n) };
+        assert_eq!(st, PLUMAGE_STATUS_OK);
+        buf.iter().map(|x| x.to_bits()).collect::<Vec<u32>>()
+    };
+    let before = feathers(clean);
+    assert!(!before.is_empty());
+    assert_eq!(feathers(degenerate), before, "the degenerate triangles change no feather");
+    // A frame: the extra vertices move along, the feathers still agree.
+    let frame: Vec<f32> = bad_pos.chunks(3).flat_map(|p| [p[0], p[1], p[2] + 0.1 * p[0]]).collect();
+    let clean_frame = &frame[..pos.len()];
+    assert_eq!(unsafe { plumage_system_step(clean, clean_frame.as_ptr(), pos.len() / 3) }, PLUMAGE_STATUS_OK);
+    assert_eq!(unsafe { plumage_system_step(degenerate, frame.as_ptr(), bad_pos.len() / 3) }, PLUMAGE_STATUS_OK);
+    assert_eq!(feathers(degenerate), feathers(clean), "after a frame");
+    unsafe { plumage_system_destroy(clean) };
+    unsafe { plumage_system_destroy(degenerate) };
 }
 
 #[test]

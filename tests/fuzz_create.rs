@@ -134,10 +134,16 @@ fn keep_small(c: &mut PlumageConfig, m: &Shape) {
     if !(c.spacing > 0.0 && c.spacing.is_finite()) {
         return;
     }
-    let (lo, hi) = m.positions.chunks(3).fold((f32::MAX, f32::MIN), |(lo, hi), p| {
-        (p.iter().fold(lo, |a, &b| a.min(b)), p.iter().fold(hi, |a, &b| a.max(b)))
+    // The diagonal of the mesh's box (an extent over all coordinates at
+    // once took an offset mesh for a huge one and let a 64 499-feather
+    // request through: seed 7, case 1971).
+    let (lo, hi) = m.positions.chunks(3).fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
+        for k in 0..p.len() {
+            (lo[k], hi[k]) = (lo[k].min(p[k]), hi[k].max(p[k]));
+        }
+        (lo, hi)
     });
-    let extent = (hi - lo).abs();
+    let extent = (0..3).map(|k| (hi[k] - lo[k]) * (hi[k] - lo[k])).sum::<f32>().sqrt();
     if extent.is_finite() && c.spacing < extent / 25.0 && c.spacing > extent * 1e-5 {
         c.spacing = extent / 25.0;
     }
@@ -185,12 +191,18 @@ fn case(rng: &mut Rng, tally: &mut Tally) {
     let use_defaults = rng.chance(0.02) && m.positions.len() < 90;
     if std::env::var_os("PLUMAGE_FUZZ_DEBUG").is_some() {
         eprintln!("mesh {:?}\nindices {:?}\nconfig {cfg:?}\ndesc {d:?}", m.positions, m.indices);
+        for (k, map) in maps.iter().enumerate() {
+            eprintln!("map {k} {map:?}");
+        }
     }
     let Some(handle) = fuzz::create(tally, if use_defaults { None } else { Some(&cfg) }, &d) else { return };
     let sys = handle.0;
     let mut count = 0usize;
     tally.saw("feather_count", unsafe { plumage_system_feather_count(sys, &mut count) });
     assert!(count <= PLUMAGE_MAX_FEATHERS as usize);
+    if std::env::var_os("PLUMAGE_FUZZ_DEBUG").is_some() {
+        eprintln!("created {count} feathers");
+    }
     fuzz::assert_finite(sys, "after create");
     let mut v = std::mem::MaybeUninit::<PlumageValidation>::zeroed();
     unsafe { (*v.as_mut_ptr()).struct_size = std::mem::size_of::<PlumageValidation>() as u32 };

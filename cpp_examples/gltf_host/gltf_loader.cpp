@@ -62,12 +62,15 @@ bool is_supported_required_extension(const std::string& name) {
 
 tinygltf::Model load_gltf_file(const std::string& path) {
     const std::vector<unsigned char> bytes = read_file(path);
+    return load_gltf_memory(bytes, path, std::filesystem::path(path).parent_path().string());
+}
+
+tinygltf::Model load_gltf_memory(const std::vector<unsigned char>& bytes, const std::string& path, const std::string& base_dir) {
     if (bytes.empty()) throw InputError(path + ": empty file");
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) throw InputError(path + ": larger than 4 GiB");
     const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
     if (!binary && !looks_like_json(bytes)) throw InputError(path + ": not a glTF file (neither a GLB container nor JSON)");
 
-    const std::string base_dir = std::filesystem::path(path).parent_path().string();
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&skip_image, nullptr);
     tinygltf::Model model;

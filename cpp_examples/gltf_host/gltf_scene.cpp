@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace plumage_host {
 namespace {
@@ -137,10 +138,19 @@ Mat4 read_matrix(const std::vector<double>& m) {
     return r;
 }
 
+// A double as a float; beyond float's range it is an infinity (a plain
+// cast of such a value is undefined behaviour).
+float to_float(double x) {
+    constexpr double kMax = static_cast<double>(std::numeric_limits<float>::max());
+    if (x > kMax) return std::numeric_limits<float>::infinity();
+    if (x < -kMax) return -std::numeric_limits<float>::infinity();
+    return static_cast<float>(x);
+}
+
 void store(const Vec3& q, size_t v, std::vector<float>& xyz) {
-    xyz[3 * v] = static_cast<float>(q.x);
-    xyz[3 * v + 1] = static_cast<float>(q.y);
-    xyz[3 * v + 2] = static_cast<float>(q.z);
+    xyz[3 * v] = to_float(q.x);
+    xyz[3 * v + 1] = to_float(q.y);
+    xyz[3 * v + 2] = to_float(q.z);
 }
 
 void require_finite(const std::vector<double>& values, const std::string& what) {
@@ -194,6 +204,12 @@ void GltfScene::init(const tinygltf::Model& model, const std::string& clip_reque
     load_mesh(model);
     select_clip(model, clip_request);
     evaluate(nullptr, 0, rest_positions_);
+    // Transforms or morph weights so large that the rest pose overflows:
+    // nothing can be dressed (poses of the clip may still overflow; the
+    // library refuses those frames and keeps the previous one).
+    for (size_t i = 0; i < rest_positions_.size(); ++i) {
+        if (!std::isfinite(rest_positions_[i])) throw InputError("mesh " + mesh_name_ + ": the rest pose of vertex " + std::to_string(i / 3) + " is not finite (node transforms or morph weights overflow)");
+    }
 }
 
 void GltfScene::load_hierarchy(const tinygltf::Model& model) {

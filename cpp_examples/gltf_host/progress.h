@@ -54,9 +54,9 @@ public:
 
 private:
     void library_phase(uint32_t phase, float fraction) {
-        static const char* const kPhases[] = {"preparing", "sampling", "ordering", "adjusting"};
+        static const char* const kPhases[] = {"preparing", "sampling", "ordering", "adjusting", "validating"};
         char text[160];
-        std::snprintf(text, sizeof text, "%s: %s %3.0f%%", context_.c_str(), phase < 4 ? kPhases[phase] : "working", fraction * 100.0);
+        std::snprintf(text, sizeof text, "%s: %s %3.0f%%", context_.c_str(), phase < sizeof kPhases / sizeof kPhases[0] ? kPhases[phase] : "working", fraction * 100.0);
         draw(text);
     }
 

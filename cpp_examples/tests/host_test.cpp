@@ -397,8 +397,8 @@ float feathers_min_x(const std::string& file) {
 }
 
 // The mean shaft direction (tip - root, normalized) of the feathers in a
-// .glb the host wrote (mesh 1, rest pose; a feather's first two vertices
-// are its root and tip in both layouts).
+// .glb the host wrote (mesh 1, rest pose). The runs here use the default
+// one-segment feather: a kite of 4 vertices, root and tip first.
 std::array<double, 3> mean_shaft(const std::string& file, size_t feathers) {
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -411,8 +411,9 @@ std::array<double, 3> mean_shaft(const std::string& file, size_t feathers) {
     const tinygltf::Accessor& a = m.accessors[static_cast<size_t>(m.meshes[1].primitives[0].attributes.at("POSITION"))];
     const tinygltf::BufferView& v = m.bufferViews[static_cast<size_t>(a.bufferView)];
     const unsigned char* data = m.buffers[static_cast<size_t>(v.buffer)].data.data() + v.byteOffset + a.byteOffset;
-    const size_t per = a.count / feathers;
-    CHECK(per == 4 || per == 6);
+    const size_t per = 4;
+    CHECK_MSG(a.count == per * feathers, std::to_string(a.count) + " vertices for " + std::to_string(feathers) + " feathers");
+    if (a.count != per * feathers) return sum;
     for (size_t f = 0; f < feathers; ++f) {
         float root[3], tip[3];
         std::memcpy(root, data + 12 * (f * per), sizeof root);

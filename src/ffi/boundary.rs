@@ -29,13 +29,22 @@ use std::sync::{Mutex, Once};
 pub struct PlumageSystem {
     pub(crate) system: System,
     progress: Option<HostProgress>,
+    /// Held by a read-only call that reports progress (validate), so that
+    /// two of them on one system never call the host's callback at once.
+    progress_calls: Mutex<()>,
     poisoned: AtomicBool,
     last_error: Mutex<CString>,
 }
 
 impl PlumageSystem {
     pub(crate) fn new(system: System, progress: Option<HostProgress>) -> Self {
-        Self { system, progress, poisoned: AtomicBool::new(false), last_error: Mutex::new(CString::default()) }
+        Self {
+            system,
+            progress,
+            progress_calls: Mutex::new(()),
+            poisoned: AtomicBool::new(false),
+            last_error: Mutex::new(CString::default()),
+        }
     }
 
     fn set_error(&self, message: &str) {
@@ -199,6 +208,25 @@ pub(crate) fn with_system_ref(sys: *const PlumageSystem, body: impl FnOnce(&Syst
     }
     let outcome = quietly(|| body(&handle.system));
     settle(handle, outcome)
+}
+
+/// A read-only call that reports to the system's progress callback (and
+/// may be stopped by it); such calls on one system run one at a time.
+pub(crate) fn with_system_ref_progress(
+    sys: *const PlumageSystem,
+    body: impl FnOnce(&System, &Progress) -> CallResult,
+) -> u32 {
+    with_system_ref(sys, |system| {
+        // SAFETY: with_system_ref checked the pointer (same contract).
+        let handle = unsafe { &*sys };
+        match &handle.progress {
+            Some(p) => {
+                let _one_at_a_time = handle.progress_calls.lock().unwrap_or_else(|e| e.into_inner());
+                body(system, &Progress::to(p))
+            }
+            None => body(system, &Progress::none()),
+        }
+    })
 }
 
 fn settle(handle: &PlumageSystem, outcome: std::thread::Result<CallResult>) -> u32 {

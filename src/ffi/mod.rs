@@ -11,7 +11,8 @@ pub use status::*;
 pub use types::*;
 
 use boundary::{
-    Failure, copy_out, read_versioned, thread_error, with_system, with_system_ref, without_system, write_versioned,
+    Failure, copy_out, read_versioned, thread_error, with_system, with_system_ref, with_system_ref_progress,
+    without_system, write_versioned,
 };
 use std::ffi::c_char;
 
@@ -572,7 +573,9 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
 
 /// Runs the exact validation (triangle–triangle intersections, body
 /// penetrations, coverage, mean pitch) on the current feathers. Only reads
-/// the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist.
+/// the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist. Reports
+/// PLUMAGE_PHASE_VALIDATING to the system's progress callback, which may stop
+/// it (PLUMAGE_STATUS_INTERRUPTED, no result written).
 ///
 /// # Safety
 /// `sys` is NULL or a live handle from `plumage_system_create`; other threads
@@ -581,11 +584,11 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
 /// bytes are writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out: *mut PlumageValidation) -> u32 {
-    with_system_ref(sys, |system| {
+    with_system_ref_progress(sys, |system, progress| {
         if out.is_null() {
             return Err(Failure::null("out"));
         }
-        let r = system.validate().ok_or_else(|| not_available("validation"))?;
+        let r = system.validate_with_progress(progress)?.ok_or_else(|| not_available("validation"))?;
         let value = PlumageValidation {
             struct_size: 0,
             reserved: 0,

@@ -184,7 +184,7 @@ pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 /// leaves the system as it was before the call (a stopped create creates
 /// nothing). It is called at least every few milliseconds while the library
 /// works, never from two threads at once: with `threads = 1` always on the
-/// thread that made the call (create, step or evaluate); with more threads
+/// thread that made the call (create, step, evaluate or validate); with more threads
 /// on that thread or on one of the system's worker threads. It must not
 /// call back into the same system.
 pub type PlumageProgressFn = Option<unsafe extern "C" fn(user_data: *mut c_void, phase: u32, fraction: f32) -> i32>;
@@ -197,6 +197,8 @@ pub const PLUMAGE_PHASE_SAMPLING: u32 = 1;
 pub const PLUMAGE_PHASE_ORDERING: u32 = 2;
 /// Progress phase: the height-field adjustment of the feathers.
 pub const PLUMAGE_PHASE_ADJUSTING: u32 = 3;
+/// Progress phase: `plumage_system_validate`'s exact checks.
+pub const PLUMAGE_PHASE_VALIDATING: u32 = 4;
 
 /// Most feathers a system may hold: a larger `target_feathers`, or a
 /// `spacing` that would plant more, is refused with
@@ -235,6 +237,7 @@ impl crate::progress::ProgressSink for HostProgress {
             Phase::Sampling => PLUMAGE_PHASE_SAMPLING,
             Phase::Ordering => PLUMAGE_PHASE_ORDERING,
             Phase::Adjusting => PLUMAGE_PHASE_ADJUSTING,
+            Phase::Validating => PLUMAGE_PHASE_VALIDATING,
         };
         // SAFETY: a host function pointer with the documented signature.
         unsafe { (self.callback)(self.user_data, code, fraction) == 0 }

@@ -97,6 +97,7 @@ pub fn sample_roots_with_progress(
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
     let buried = BuriedSkin::new(positions, &mesh.triangles);
+    progress.check(Phase::Sampling, 0.0)?;
     let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
     check_spacing_estimate(density.effective_area(), config)?;
@@ -116,6 +117,7 @@ pub fn sample_roots_with_progress(
         None => Vec::new(),
     };
     let seconds = start.elapsed().as_secs_f64();
+    progress.check(Phase::Sampling, 0.95)?;
     let metrics = sampling_metrics(surface, positions, fields, &buried, &roots, spacing, config.theta);
     Ok(Sampling { roots, spacing, metrics, seconds })
 }
@@ -167,11 +169,11 @@ fn sampling_pass(
     // Pool size = pool_factor × expected root count.
     let size = (config.pool_factor as f64 * expected).ceil();
     let size = if size.is_finite() { (size as usize).clamp(MIN_POOL, MAX_POOL) } else { MAX_POOL };
-    let drawn = density.draw_pool(d, size, config.seed);
+    let keep_going = || progress.check(Phase::Sampling, 0.5).is_ok();
+    let drawn = density.draw_pool(d, size, config.seed, &keep_going);
     // Cells of about d: a query of radius 2d then reads little beyond the ball.
     let cell = d * fields.median_spacing_scale();
     let pool = SortedPool::new(drawn, cell);
-    let keep_going = || progress.check(Phase::Sampling, 0.5).is_ok();
     let mut disk = DiskSampler::new(surface, positions, &pool, cell).with_keep_going(&keep_going);
     let mut rng = Rng::for_stream(config.seed, SAMPLER_STREAM);
     match config.sampler {

@@ -102,8 +102,16 @@ impl<'a> DensityField<'a> {
     }
 
     /// Draws `count` pool points for global spacing `d`, deterministic for
-    /// `seed` whatever the thread count.
-    pub(crate) fn draw_pool(&self, d: f32, count: usize, seed: u64) -> Vec<PoolPoint> {
+    /// `seed` whatever the thread count. `keep_going` is asked before each
+    /// block of draws: once it says stop, the remaining blocks draw nothing
+    /// (the caller then reports the interruption).
+    pub(crate) fn draw_pool(
+        &self,
+        d: f32,
+        count: usize,
+        seed: u64,
+        keep_going: &(dyn Fn() -> bool + Sync),
+    ) -> Vec<PoolPoint> {
         let total = self.cdf.last().copied().unwrap_or(0.0);
         if count == 0 || total.is_nan() || total <= 0.0 {
             return Vec::new();
@@ -112,6 +120,9 @@ impl<'a> DensityField<'a> {
         let parts: Vec<Vec<PoolPoint>> = (0..blocks)
             .into_par_iter()
             .map(|b| {
+                if !keep_going() {
+                    return Vec::new();
+                }
                 let wanted = POOL_BLOCK.min(count - b * POOL_BLOCK);
                 let mut rng = Rng::for_stream(seed ^ POOL_STREAM, b as u64);
                 self.draw_block(&mut rng, d, wanted, total)

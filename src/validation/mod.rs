@@ -14,8 +14,10 @@ use tri_tri::{Prepared, prepared_intersect};
 pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid};
+use crate::error::Result;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
+use crate::progress::{Phase, Progress};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -60,18 +62,47 @@ pub fn validate(
     probes: usize,
     seed: u64,
 ) -> Validation {
+    let none = Progress::none();
+    validate_with_progress(feather_triangles, frames, shapes, poses, body, skin, probes, seed, &none)
+        .expect("validation without a progress sink is never interrupted")
+}
+
+/// As [`validate`], reporting `Phase::Validating` to `progress` between its
+/// stages (the grid, coverage, pairs, penetrations, tip heights); stopped,
+/// it returns `Interrupted` (validation changes nothing).
+#[allow(clippy::too_many_arguments)]
+pub fn validate_with_progress(
+    feather_triangles: &[FeatherTriangles],
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &[FeatherPose],
+    body: &BodyIndex,
+    skin: &ProbeSkin<'_>,
+    probes: usize,
+    seed: u64,
+    progress: &Progress,
+) -> Result<Validation> {
+    progress.check(Phase::Validating, 0.0)?;
     let (grid, owner) = feather_grid(feather_triangles);
+    progress.check(Phase::Validating, 0.1)?;
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
     let coverage = count_covered(&grid, longest, skin, body, probes, seed);
-    Validation {
-        intersecting_pairs: intersecting_pairs_in(&grid, &owner),
-        body_penetrations: body_penetrations(frames, shapes, poses, body),
+    progress.check(Phase::Validating, 0.4)?;
+    let intersecting_pairs = intersecting_pairs_in(&grid, &owner);
+    progress.check(Phase::Validating, 0.7)?;
+    let body_penetrations = body_penetrations(frames, shapes, poses, body);
+    progress.check(Phase::Validating, 0.9)?;
+    let tip_heights = summarise_tip_heights(&tip_heights(frames, shapes, poses, body));
+    progress.check(Phase::Validating, 1.0)?;
+    Ok(Validation {
+        intersecting_pairs,
+        body_penetrations,
         coverage: coverage.fraction(),
         probes: coverage.probes,
         buried_probes: coverage.buried,
         mean_pitch_deg: mean_pitch_deg(poses),
-        tip_heights: summarise_tip_heights(&tip_heights(frames, shapes, poses, body)),
-    }
+        tip_heights,
+    })
 }
 
 /// [`validate`] restricted to a part of the coat: the feathers `member`

@@ -121,7 +121,7 @@ pub fn peak_rss_kib() -> u64 {
 /// Runs `case` for every case index of the run (see the module notes) and
 /// prints the tally: cases, statuses seen, the slowest case, peak memory.
 pub fn run(target: &str, default_cases: u64, mut case: impl FnMut(&mut Rng, &mut Tally)) {
-    let seed = env_u64("PLUMAGE_FUZZ_SEED").unwrap_or(0x706C_756D_6167_65);
+    let seed = env_u64("PLUMAGE_FUZZ_SEED").unwrap_or(0x0070_6C75_6D61_6765);
     let only = env_u64("PLUMAGE_FUZZ_CASE");
     let cases = env_u64("PLUMAGE_FUZZ_CASES").unwrap_or(default_cases).max(only.map_or(0, |o| o + 1));
     let mut tally = Tally::default();

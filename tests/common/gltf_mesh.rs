@@ -9,9 +9,10 @@
 //! the node's own transform.
 //!
 //! The models live in `../shared/data` relative to the crate root (see
-//! [`data_dir`] for the override); when one
-//! is absent, [`load_model`] says so on stderr and returns `None`, and the
-//! calling test reports itself as skipped.
+//! [`data_dir`] for the override). A missing model fails the test that
+//! needs it, unless `PLUMAGE_ALLOW_MISSING_DATA=1` is set: then
+//! [`load_model`] and [`morph_clip`] print a numbered `SKIPPED` line on
+//! stderr and return `None`, and the calling test checks nothing.
 
 use super::shapes::Shape;
 use glam::{Mat4, Vec3};
@@ -26,18 +27,39 @@ pub fn data_dir() -> PathBuf {
     }
 }
 
+/// Environment variable that turns a missing test model from a failure
+/// into a counted skip.
+pub const ALLOW_MISSING_DATA: &str = "PLUMAGE_ALLOW_MISSING_DATA";
+
+/// Models reported missing by this test binary (numbers the skip lines).
+static SKIPPED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// The bytes of the model at `path`. Missing: a panic naming the path and
+/// the opt-out, or with `PLUMAGE_ALLOW_MISSING_DATA=1` a numbered skip line
+/// and `None`.
+pub fn read_model(path: &std::path::Path) -> Option<Vec<u8>> {
+    match std::fs::read(path) {
+        Ok(b) => Some(b),
+        Err(e) if std::env::var(ALLOW_MISSING_DATA).is_ok_and(|v| v == "1") => {
+            let n = SKIPPED.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            eprintln!(
+                "SKIPPED ({n} in this test binary): test model {} not available ({e}); {ALLOW_MISSING_DATA}=1, so the test checks nothing",
+                path.display()
+            );
+            None
+        }
+        Err(e) => panic!(
+            "test model {} not available ({e}): the models live in ../shared/data from the crate root or in $PLUMAGE_DATA_DIR; set {ALLOW_MISSING_DATA}=1 to skip the tests that need them",
+            path.display()
+        ),
+    }
+}
+
 /// Loads every triangle primitive of every mesh node of the default scene
-/// of `file` (e.g. "Flamingo.glb"). `None`, with a message, when the file is
-/// missing.
+/// of `file` (e.g. "Flamingo.glb"). A missing file: see [`read_model`].
 pub fn load_model(file: &str) -> Option<Shape> {
     let path = data_dir().join(file);
-    let bytes = match std::fs::read(&path) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("SKIPPED: test model {} not available ({e}); the test checks nothing.", path.display());
-            return None;
-        }
-    };
+    let bytes = read_model(&path)?;
     Some(read_glb(&bytes).unwrap_or_else(|e| panic!("{} is not a readable GLB: {e}", path.display())))
 }
 
@@ -123,17 +145,11 @@ fn append_primitive(
 
 /// The frames of a model's first morph-weight animation sampled at `fps`
 /// (LINEAR interpolation of the weights; node transforms taken as static),
-/// each as flat positions in the numbering of [`read_glb`]. `None`, with a
-/// message, when the file is missing.
+/// each as flat positions in the numbering of [`read_glb`]. A missing file:
+/// see [`read_model`].
 pub fn morph_clip(file: &str, fps: f32) -> Option<(Shape, Vec<Vec<f32>>)> {
     let path = data_dir().join(file);
-    let bytes = match std::fs::read(&path) {
-        Ok(b) => b,
-        Err(e) => {
-            eprintln!("SKIPPED: test model {} not available ({e}); the test checks nothing.", path.display());
-            return None;
-        }
-    };
+    let bytes = read_model(&path)?;
     let gltf = gltf::Gltf::from_slice(&bytes).expect("readable GLB");
     let blob = gltf.blob.as_deref();
     let animation = gltf.animations().next().expect("an animation");

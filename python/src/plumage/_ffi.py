@@ -25,7 +25,7 @@ STATUS_NOT_AVAILABLE = 16
 SAMPLERS = {"guided": 0, "random": 1}
 PRESETS = {"feathers": 0, "scales": 1}
 MODES = {"incremental": 0, "legacy": 1, "rebuild": 2}
-PHASES = {0: "preparing", 1: "sampling", 2: "ordering", 3: "adjusting"}
+PHASES = {0: "preparing", 1: "sampling", 2: "ordering", 3: "adjusting", 4: "validating"}
 
 ProgressFn = ctypes.CFUNCTYPE(c_int32, c_void_p, c_uint32, c_float)
 TaskFn = ctypes.CFUNCTYPE(None, c_void_p, c_uint32)
