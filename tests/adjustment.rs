@@ -832,13 +832,9 @@ fn a_segmented_feather_drapes_over_a_cylinder() {
     assert!(draped < 0.05, "draped, the tip lies on the cylinder (within a few thicknesses): {draped}");
 }
 
-#[test]
-fn a_segmented_feather_drapes_over_a_step() {
-    // A floor at height 1.2 up to x = 2 (half the feather), a wall, then a
-    // floor at 0: the feather lies on the upper floor and bends down over
-    // the edge.
-    let (a, h) = (2.0f32, 1.2f32);
-    let profile = [(-4.0f32, h), (a, h), (a, 0.0), (12.0, 0.0)];
+/// A strip 12 wide along y whose cross-section follows `profile`, (x, z)
+/// points along x, normals up.
+fn profile_mesh(profile: &[(f32, f32)]) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut pos = Vec::new();
     let mut tris = Vec::new();
     for pair in profile.windows(2) {
@@ -850,6 +846,17 @@ fn a_segmented_feather_drapes_over_a_step() {
         tris.push([base, base + 2, base + 3]);
         tris.push([base, base + 3, base + 1]);
     }
+    (pos, tris)
+}
+
+#[test]
+fn a_segmented_feather_drapes_over_a_step() {
+    // A floor at height 1.2 up to x = 2 (half the feather), a wall, then a
+    // floor at 0: the feather lies on the upper floor and bends down over
+    // the edge.
+    let (a, h) = (2.0f32, 1.2f32);
+    let profile = [(-4.0f32, h), (a, h), (a, 0.0), (12.0, 0.0)];
+    let (pos, tris) = profile_mesh(&profile);
     let (_, straight, draped_pose, draped) = drape_over(&pos, &tris, Vec3::new(0.0, 0.0, h));
     println!("step: tip height straight {straight:.3} L, draped {draped:.3} L, bends {:?}", draped_pose.bends);
     assert!(draped < 0.5 * straight, "draped over the edge the tip comes down ({straight} -> {draped})");
@@ -864,17 +871,7 @@ fn a_segmented_feather_climbs_a_steep_ridge_and_drapes_beyond_it() {
     // so the drape must raise the root segment and then bend down beyond
     // the crest (before, it kept the straight pose).
     let profile = [(-4.0f32, 0.0f32), (1.1, 0.0), (1.8, 0.7), (2.5, 0.0), (12.0, 0.0)];
-    let mut pos = Vec::new();
-    let mut tris = Vec::new();
-    for pair in profile.windows(2) {
-        let base = pos.len() as u32;
-        for &(x, z) in pair {
-            pos.push(Vec3::new(x, -6.0, z));
-            pos.push(Vec3::new(x, 6.0, z));
-        }
-        tris.push([base, base + 2, base + 3]);
-        tris.push([base, base + 3, base + 1]);
-    }
+    let (pos, tris) = profile_mesh(&profile);
     let (_, straight, draped_pose, draped) = drape_over(&pos, &tris, Vec3::ZERO);
     println!("ridge: tip height straight {straight:.3} L, draped {draped:.3} L, pose {draped_pose:?}");
     assert!(!draped_pose.is_straight(), "the feather bends beyond the ridge");
