@@ -83,7 +83,7 @@ impl Dressing {
             shapes,
             roots,
             neighbour_params: NeighbourParams { k: config.k_neighbours, ..NeighbourParams::default() },
-            adjust_params: AdjustParams::from_config(config),
+            adjust_params: config.adjust_params(),
             mode: config.mode,
             gamma: config.gamma,
             lambda: config.lambda,

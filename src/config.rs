@@ -4,6 +4,11 @@
 use crate::error::{Error, ErrorKind, Result};
 use glam::Vec3;
 
+/// Default pop threshold (`Config::pop_threshold`): 5° (radians).
+pub const DEFAULT_POP_THRESHOLD: f32 = 5.0 * std::f32::consts::PI / 180.0;
+/// Default settle rate (`Config::settle_rate`): 2° a frame (radians).
+pub const DEFAULT_SETTLE_RATE: f32 = 2.0 * std::f32::consts::PI / 180.0;
+
 /// How roots are planted (DESIGN.md §2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SamplerKind {
@@ -196,10 +201,26 @@ impl Default for Config {
             bend_limit: crate::adjustment::DEFAULT_BEND_LIMIT,
             length_per_spacing: crate::feather::LENGTH_PER_SPACING,
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
-            pop_threshold: crate::animation::coherence::DEFAULT_POP_THRESHOLD,
-            settle_rate: crate::animation::coherence::DEFAULT_SETTLE_RATE,
+            pop_threshold: DEFAULT_POP_THRESHOLD,
+            settle_rate: DEFAULT_SETTLE_RATE,
             checkpoint_interval: 0,
             checkpoint_cap: 64,
+        }
+    }
+}
+
+impl Config {
+    /// The adjustment's parameters: its defaults with this configuration's
+    /// height-field resolution, fluffiness, collision allowance and bend
+    /// limit.
+    pub fn adjust_params(&self) -> crate::adjustment::AdjustParams {
+        crate::adjustment::AdjustParams {
+            height_field_u: self.height_field_u,
+            height_field_v: self.height_field_v,
+            fluffiness: self.fluffiness,
+            collision_allowance: self.collision_allowance,
+            bend_limit: self.bend_limit,
+            ..Default::default()
         }
     }
 }

@@ -2,13 +2,14 @@
 //! feathers' rest binding (the dressing) and their state at the current pose
 //! (the coat), and is what the FFI handle wraps.
 
-use crate::animation::coherence::{PoseChanges, pose_change, pose_changes};
+use crate::animation::coherence::{PoseChanges, pose_changes};
 use crate::animation::step::{StepWorkspace, step_coat};
 use crate::coat::{Coat, Dressing, Workspace};
 use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
+use crate::feather::pose_change;
 use crate::feather::{FeatherMesh, FeatherPose, FeatherTriangles, MAX_TRIANGLES, triangles_per_feather};
 use crate::field::Fields;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};

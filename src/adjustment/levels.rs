@@ -11,8 +11,8 @@
 
 use super::steps::{BoxesOf, ObstacleBoxes, ObstacleReach, adjust_feather_boxed, bounding_sphere, pose_is_clear_boxed};
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
-use crate::animation::coherence::toward;
 use crate::body::BodyIndex;
+use crate::feather::toward;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
@@ -1015,7 +1015,7 @@ mod tests {
             assert!(!meets(&poses), "S = {segments}: B lifts clear at once");
             // Lifted at once: by more than the settle rate allows (a kite
             // pitches up; a bent feather may bend up instead).
-            let lifted = crate::animation::coherence::pose_change(&b_rest, &poses[1]);
+            let lifted = crate::feather::pose_change(&b_rest, &poses[1]);
             assert!(lifted > 2.0 * rate, "S = {segments}: B moved by only {lifted} from {b_rest:?} to {:?}", poses[1]);
             // A falls back: B settles frame by frame to its pose solved at once.
             poses[0] = a_rest;
@@ -1027,7 +1027,7 @@ mod tests {
                 adjuster.settle_next_run(rate);
                 run(&mut adjuster, &mut poses, Selection::Subset(&only_b));
                 assert!(!meets(&poses), "S = {segments}: B never passes through A");
-                let change = crate::animation::coherence::pose_change(&before, &poses[1]);
+                let change = crate::feather::pose_change(&before, &poses[1]);
                 assert!(change <= rate + 1e-6, "S = {segments}: B moved by {change} in one frame");
                 assert_eq!(adjuster.settling()[1], poses[1] != solved[1]);
                 frames_to_settle += 1;

@@ -27,7 +27,6 @@ pub use height_field::HeightField;
 pub use levels::{AdjustStats, Adjuster, CandidateLists, Selection, adjust_in_order};
 pub use steps::adjust_feather;
 
-use crate::config::Config;
 use crate::feather::{FeatherPose, FeatherTriangles};
 
 /// Default clearance kept between a feather and an obstacle's top, as a
@@ -117,21 +116,6 @@ impl Default for AdjustParams {
             max_roll: DEFAULT_MAX_ROLL,
             min_scale: DEFAULT_MIN_SCALE,
             bend_limit: DEFAULT_BEND_LIMIT,
-        }
-    }
-}
-
-impl AdjustParams {
-    /// The defaults with the resolution, fluffiness and collision allowance
-    /// of a configuration.
-    pub fn from_config(config: &Config) -> Self {
-        Self {
-            height_field_u: config.height_field_u,
-            height_field_v: config.height_field_v,
-            fluffiness: config.fluffiness,
-            collision_allowance: config.collision_allowance,
-            bend_limit: config.bend_limit,
-            ..Self::default()
         }
     }
 }

@@ -37,28 +37,7 @@
 //! without popping now, at the cost of more readjustments: 10° up to
 //! 1.05°, 5° up to 0.40° (0.04 % pops either way).
 
-use crate::feather::FeatherPose;
-
-/// Default pop threshold: 5° (radians).
-pub const DEFAULT_POP_THRESHOLD: f32 = 5.0 * std::f32::consts::PI / 180.0;
-
-/// Default settle rate: 2° a frame (radians).
-pub const DEFAULT_SETTLE_RATE: f32 = 2.0 * std::f32::consts::PI / 180.0;
-
-/// `from` moved toward `to` by at most `rate` radians in pitch, roll and
-/// each bend; the size is `to`'s. A feather that was not shown (size 0)
-/// takes `to` at once.
-pub fn toward(from: &FeatherPose, to: &FeatherPose, rate: f32) -> FeatherPose {
-    if from.scale <= 0.0 || to.scale <= 0.0 {
-        return *to;
-    }
-    let step = |a: f32, b: f32| if (b - a).abs() <= rate { b } else { a + rate.copysign(b - a) };
-    let mut pose = FeatherPose::new(step(from.pitch, to.pitch), step(from.roll, to.roll)).with_scale(to.scale);
-    for (k, b) in pose.bends.iter_mut().enumerate() {
-        *b = step(from.bends[k], to.bends[k]);
-    }
-    pose
-}
+use crate::feather::{FeatherPose, pose_change};
 
 /// The pose changes of one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -67,14 +46,6 @@ pub struct PoseChanges {
     pub pops: usize,
     /// The largest change of any feather, radians.
     pub largest: f32,
-}
-
-/// The largest angle by which `after` differs from `before`: pitch, roll
-/// or any joint's bend. A feather that appears or vanishes (its size goes
-/// to or from 0) changes by its whole pitch and bends.
-pub fn pose_change(before: &FeatherPose, after: &FeatherPose) -> f32 {
-    let bends = before.bends.iter().zip(&after.bends).map(|(a, b)| (a - b).abs());
-    bends.fold((before.pitch - after.pitch).abs().max((before.roll - after.roll).abs()), f32::max)
 }
 
 /// The pose changes between two frames of the same feathers (`before[i]`
@@ -89,6 +60,8 @@ pub fn pose_changes(before: &[FeatherPose], after: &[FeatherPose], threshold: f3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::DEFAULT_POP_THRESHOLD;
+    use crate::feather::toward;
 
     #[test]
     fn a_planted_snap_is_counted_and_small_drift_is_not() {

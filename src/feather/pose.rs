@@ -283,6 +283,29 @@ pub fn tip_position(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) 
     frame.to_world(pose.rotation().apply(shaft.points[shaft.plan.segments]))
 }
 
+/// The largest angle by which `after` differs from `before`: pitch, roll
+/// or any joint's bend. A feather that appears or vanishes (its size goes
+/// to or from 0) changes by its whole pitch and bends.
+pub fn pose_change(before: &FeatherPose, after: &FeatherPose) -> f32 {
+    let bends = before.bends.iter().zip(&after.bends).map(|(a, b)| (a - b).abs());
+    bends.fold((before.pitch - after.pitch).abs().max((before.roll - after.roll).abs()), f32::max)
+}
+
+/// `from` moved toward `to` by at most `rate` radians in pitch, roll and
+/// each bend; the size is `to`'s. A feather that was not shown (size 0)
+/// takes `to` at once.
+pub fn toward(from: &FeatherPose, to: &FeatherPose, rate: f32) -> FeatherPose {
+    if from.scale <= 0.0 || to.scale <= 0.0 {
+        return *to;
+    }
+    let step = |a: f32, b: f32| if (b - a).abs() <= rate { b } else { a + rate.copysign(b - a) };
+    let mut pose = FeatherPose::new(step(from.pitch, to.pitch), step(from.roll, to.roll)).with_scale(to.scale);
+    for (k, b) in pose.bends.iter_mut().enumerate() {
+        *b = step(from.bends[k], to.bends[k]);
+    }
+    pose
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
