@@ -223,15 +223,7 @@ fn drape(
             if lowest >= highest || !room(raised_pose(pose, i, highest), i, scratch) {
                 continue;
             }
-            let (mut fails, mut fits) = (lowest, highest);
-            for _ in 0..DRAPE_RAISE_BISECTIONS {
-                let mid = 0.5 * (fails + fits);
-                if room(raised_pose(pose, i, mid), i, scratch) {
-                    fits = mid;
-                } else {
-                    fails = mid;
-                }
-            }
+            let fits = narrow(lowest, highest, DRAPE_RAISE_BISECTIONS, |a| room(raised_pose(pose, i, a), i, scratch));
             found = Some((i, fits));
             break;
         }
@@ -255,6 +247,113 @@ fn drape(
     pose
 }
 
+/// Steps (radians, about 1.4°) of the ascent of a segment in
+/// [`repair_drape`]; the first clear one is narrowed by [`DRAPE_BISECTIONS`]
+/// halvings.
+const REPAIR_STEP: f32 = 0.025;
+/// Steps of that ascent before the rest of the way up to the segment's
+/// highest angle is bisected.
+const REPAIR_ASCENT_STEPS: usize = 8;
+
+/// Repairs a segmented feather's pose `start` (its pose of the previous
+/// frame, or that pose moved toward a newly solved one) with as little
+/// change as it takes: segment by segment from the root, each keeps its
+/// angle if it is clear there by the exact checks (with the earlier
+/// segments as repaired), else rises to the lowest clear angle above it
+/// (see [`ascend`]); the roll is kept. `None` when a segment is blocked
+/// even at its highest angle, or the whole feather fails its exact check.
+/// Solving a drape afresh from the straight pose ([`drape`]) finds a clear
+/// pose too, but from another start: its bends may differ from the last
+/// frame's by tens of degrees (a feather that pops while every pose is
+/// clear), where this keeps each angle unless something pushes it up.
+pub(crate) fn repair_drape(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    start: FeatherPose,
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    scratch: &mut HeightField,
+) -> Option<FeatherPose> {
+    let segments = shape.segment_count();
+    if segments == 1 || start.scale <= 0.0 {
+        return None;
+    }
+    let mut hints = CheckHints::default();
+    let (bend_low, bend_high) = params.bend_range();
+    let range = |k: usize| if k == 0 { (params.min_pitch, params.max_pitch) } else { (bend_low, bend_high) };
+    let set = |pose: &mut FeatherPose, k: usize, angle: f32| {
+        if k == 0 { pose.pitch = angle } else { pose.bends[k - 1] = angle }
+    };
+    let angle = |pose: &FeatherPose, k: usize| if k == 0 { pose.pitch } else { pose.bends[k - 1] };
+    let mut pose = start;
+    for k in 0..segments {
+        let (low, high) = range(k);
+        let from = angle(&pose, k).clamp(low, high);
+        set(&mut pose, k, from);
+        if segment_check(frame, shape, pose, k, boxes, body, scratch, &mut hints) {
+            continue;
+        }
+        // Segment k is not clear: raise it and every angle before it by
+        // the same amount (each up to its highest), the least that clears
+        // them all: the shaft's curve up to k is kept and no one joint
+        // takes the whole lift.
+        let base = pose;
+        let raised = |d: f32| {
+            let mut trial = base;
+            for j in 0..=k {
+                set(&mut trial, j, (angle(&base, j) + d).min(range(j).1));
+            }
+            trial
+        };
+        let mut clear = |d: f32| {
+            let trial = raised(d);
+            (0..=k).all(|j| segment_check(frame, shape, trial, j, boxes, body, scratch, &mut hints))
+        };
+        let most = (0..=k).map(|j| range(j).1 - angle(&base, j)).fold(0.0f32, f32::max);
+        let d = ascend(0.0, most, &mut clear)?;
+        pose = raised(d);
+    }
+    exact_check(frame, shape, pose, boxes, body, scratch, true, &mut hints).then_some(pose)
+}
+
+/// The lowest angle above `from` (which is not clear) up to `high` at
+/// which `clear` holds: [`REPAIR_ASCENT_STEPS`] steps of [`REPAIR_STEP`],
+/// the first clear one narrowed by halving; past them, the rest of the way
+/// up to `high` bisected. `None` when `high` is not clear.
+fn ascend(from: f32, high: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f32> {
+    let mut failed = from;
+    for s in 1..=REPAIR_ASCENT_STEPS {
+        let a = (from + s as f32 * REPAIR_STEP).min(high);
+        if a <= failed {
+            return None;
+        }
+        if clear(a) {
+            return Some(narrow(failed, a, DRAPE_BISECTIONS, &mut clear));
+        }
+        failed = a;
+    }
+    if failed >= high || !clear(high) {
+        return None;
+    }
+    Some(narrow(failed, high, DRAPE_RAISE_BISECTIONS, clear))
+}
+
+/// Narrows the boundary between an angle `failed` at which `clear` fails
+/// and one `fits` at which it holds by `halvings` bisections; the clear
+/// end.
+fn narrow(mut failed: f32, mut fits: f32, halvings: usize, mut clear: impl FnMut(f32) -> bool) -> f32 {
+    for _ in 0..halvings {
+        let mid = 0.5 * (failed + fits);
+        if clear(mid) {
+            fits = mid;
+        } else {
+            failed = mid;
+        }
+    }
+    fits
+}
+
 /// The lowest angle from `high` down to `low` at which `clear` holds,
 /// coming down from `high` in [`DRAPE_STEP`]s and stopping before the
 /// first that fails, then narrowing that step by halving. `None` when
@@ -270,16 +369,7 @@ fn descend(high: f32, low: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f3
             return Some(above);
         }
         if !clear(below) {
-            let mut failed = below;
-            for _ in 0..DRAPE_BISECTIONS {
-                let mid = 0.5 * (above + failed);
-                if clear(mid) {
-                    above = mid;
-                } else {
-                    failed = mid;
-                }
-            }
-            return Some(above);
+            return Some(narrow(below, above, DRAPE_BISECTIONS, clear));
         }
         above = below;
     }
