@@ -9,9 +9,9 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
-use super::steps::{
-    BoxesOf, ObstacleBoxes, ObstacleReach, adjust_feather_boxed, bounding_sphere, pose_is_clear_boxed, repair_drape,
-};
+use super::checks::{BoxesOf, ObstacleBoxes, ObstacleReach, bounding_sphere, pose_is_clear_boxed};
+use super::drape::repair_drape;
+use super::steps::adjust_feather_boxed;
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::toward;

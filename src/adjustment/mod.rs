@@ -19,8 +19,11 @@
 //! reading only earlier feathers, parallel by levels of the obstacle
 //! relation, bitwise identical to the serial result at any thread count.
 
+mod checks;
+mod drape;
 mod height_field;
 mod levels;
+mod pitch_roll;
 mod steps;
 
 pub use height_field::HeightField;

@@ -1,0 +1,269 @@
+//! The exact checks of a posed feather (or a part of it): its triangles
+//! against its obstacles' (and their raised tops) and against the body
+//! beyond its root socket, with the boxes that rule most pairs out; which
+//! obstacles can matter to a feather at all ([`ObstacleReach`]).
+
+#[cfg(test)]
+use super::ObstacleFeather;
+use super::height_field::GridExtent;
+use super::{AdjustParams, HeightField};
+use crate::body::{Aabb, BodyIndex};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles};
+use crate::geometry::RootFrame;
+use crate::validation::{BoxedTriangles, FeatherBoxes};
+use glam::Vec3;
+
+/// Where an obstacle must reach to matter to [`adjust_feather`] for one
+/// feather, at any size it may be given (≤ its shape) and any pose. An
+/// obstacle, bounded by a sphere, matters when it may be rasterised (it
+/// meets the column over the grid, from the lowest floor up) or may meet
+/// the posed feather in the exact check (it meets the ball around the root
+/// that holds the kite at every pitch and roll). Leaving out the others
+/// changes nothing: [`HeightField::add_obstacle`] would reject them and the
+/// exact test cannot find an intersection. The tests keep a margin far
+/// above f32 rounding, so a doubtful case is kept.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ObstacleReach {
+    frame: RootFrame,
+    far: f32,
+    half_span: f32,
+    floor: f32,
+    ball: f32,
+    margin: f32,
+}
+
+impl ObstacleReach {
+    /// The reach of feather `shape` at `frame` under `params`.
+    pub(crate) fn new(frame: &RootFrame, shape: &FeatherShape, params: &AdjustParams) -> Self {
+        let grid = GridExtent::new(shape, params.height_field_u, params.height_field_v, params.min_pitch);
+        // Shorter sizes lie in the same column (x ≥ 0 covers every root
+        // socket) above the full size's floor, which is the lowest.
+        let ball = shape.kite_corners().iter().map(|c| c.length()).fold(0.0f32, f32::max);
+        let margin = 1e-4 * (grid.far + grid.half_span - grid.floor) + 1e-5 * frame.position.abs().max_element();
+        Self { frame: *frame, far: grid.far, half_span: grid.half_span, floor: grid.floor, ball, margin }
+    }
+
+    /// Whether an obstacle inside the sphere (`centre`, `radius`), whose
+    /// top lies `thickness` above it, may matter: `None` when it cannot,
+    /// else whether it may be rasterised (`false`: only the exact check
+    /// can meet it). NaN input is kept whole.
+    #[inline]
+    pub(crate) fn may_matter(&self, centre: Vec3, radius: f32, thickness: f32) -> Option<bool> {
+        let m = self.margin + 1e-5 * (radius + centre.abs().max_element());
+        let d = centre - self.frame.position;
+        let c = Vec3::new(d.dot(self.frame.tangent), d.dot(self.frame.binormal), d.dot(self.frame.normal));
+        let out_of_column = c.x + radius < -m
+            || c.x - radius > self.far + m
+            || c.y.abs() - radius > self.half_span + m
+            || c.z + radius + thickness.max(0.0) < self.floor - m;
+        let out_of_ball = d.length() > self.ball + radius + m;
+        (!(out_of_column && out_of_ball)).then_some(!out_of_column)
+    }
+}
+
+/// A sphere around a feather's triangles: centre and radius. For the kite
+/// the centre is the mean of its four corners; for a segmented feather the
+/// mean of every triangle corner.
+pub(crate) fn bounding_sphere(triangles: &[[Vec3; 3]]) -> (Vec3, f32) {
+    if let [[root, tip, left], [_, right, _]] = *triangles {
+        let centre = 0.25 * (root + tip + left + right);
+        let radius = [root, tip, left, right].iter().map(|p| (*p - centre).length()).fold(0.0f32, f32::max);
+        return (centre, radius);
+    }
+    let corners = || triangles.iter().flatten().copied();
+    let centre = corners().sum::<Vec3>() / (3 * triangles.len()).max(1) as f32;
+    let radius = corners().map(|p| (p - centre).length()).fold(0.0f32, f32::max);
+    (centre, radius)
+}
+
+/// The exact check of a pose: the feather's triangles meet no obstacle's,
+/// and it does not penetrate the body beyond its root socket (the tests of
+/// [`crate::validation`]). `scratch` lends its body-query buffers.
+#[cfg(test)]
+pub(crate) fn pose_is_clear(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: &[ObstacleFeather],
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+) -> bool {
+    let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
+    pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes }, body, scratch)
+}
+
+/// [`pose_is_clear`] with the obstacles' [`ObstacleBoxes`] made already.
+pub(crate) fn pose_is_clear_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+) -> bool {
+    exact_check(frame, shape, pose, boxes, body, scratch, false, &mut CheckHints::default())
+}
+
+/// What made the last exact checks of one feather fail: the obstacle and
+/// body triangle tested first by the next check (poses a little apart
+/// mostly fail on the same one). Only the order of the tests depends on
+/// them, never an answer.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct CheckHints {
+    obstacle: Option<usize>,
+    top: Option<usize>,
+    body: Option<u32>,
+}
+
+/// An obstacle as the exact checks meet it: its triangles and its
+/// [`raised_top`] with their boxes. The adjuster makes them once per posed
+/// feather, for every feather it is an obstacle of.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ObstacleBoxes {
+    triangles: BoxedTriangles,
+    top: BoxedTriangles,
+}
+
+impl ObstacleBoxes {
+    /// The boxes of an obstacle with these triangles and thickness.
+    pub(crate) fn new(triangles: &[[Vec3; 3]], thickness: f32) -> Self {
+        let top = raised_top(triangles, thickness);
+        Self { triangles: BoxedTriangles::new(triangles), top: BoxedTriangles::new(&top) }
+    }
+}
+
+/// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
+/// `all[ids[k]]`, or `all[k]` without `ids`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxesOf<'a> {
+    pub(crate) ids: Option<&'a [u32]>,
+    pub(crate) all: &'a [ObstacleBoxes],
+}
+
+impl<'a> BoxesOf<'a> {
+    /// Those whose triangles' or top's box meets the box around the ball
+    /// about the root that holds `shape` (a size of the feather at
+    /// `frame`) at any pose, listed into `within`: no other can meet the
+    /// posed feather's box, so leaving them out changes no answer (only
+    /// the positions the check hints refer to). The ball is widened far
+    /// beyond the rounding of the posed corners.
+    pub(super) fn within_reach<'b>(
+        &self,
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        within: &'b mut Vec<u32>,
+    ) -> BoxesOf<'b>
+    where
+        'a: 'b,
+    {
+        let reach = shape.kite_corners().iter().map(|c| c.length()).fold(0.0f32, f32::max);
+        let radius = reach * (1.0 + 1e-3) + 1e-5 * frame.position.abs().max_element();
+        let ball = Aabb::around(frame.position, radius);
+        within.clear();
+        within.extend((0..self.len()).filter_map(|k| {
+            let b = self.get(k);
+            let index = self.ids.map_or(k as u32, |ids| ids[k]);
+            (b.triangles.bounds().overlaps(&ball) || b.top.bounds().overlaps(&ball)).then_some(index)
+        }));
+        BoxesOf { ids: Some(within), all: self.all }
+    }
+
+    fn len(&self) -> usize {
+        self.ids.map_or(self.all.len(), <[u32]>::len)
+    }
+
+    #[inline]
+    fn get(&self, k: usize) -> &ObstacleBoxes {
+        match self.ids {
+            Some(ids) => &self.all[ids[k] as usize],
+            None => &self.all[k],
+        }
+    }
+}
+
+/// Whether `test` holds for some index below `n`, trying `hint` first and
+/// setting it to the one found.
+fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -> bool {
+    if hint.is_some_and(|k| k < n && test(k)) {
+        return true;
+    }
+    match (0..n).position(test) {
+        Some(k) => {
+            *hint = Some(k);
+            true
+        }
+        None => false,
+    }
+}
+
+/// Whether the feather (`mine`) meets some obstacle, or with `top` some
+/// obstacle's [`raised_top`], trying `hint` first and setting it to the
+/// one found.
+fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut Option<usize>) -> bool {
+    any_index(boxes.len(), hint, |k| {
+        let b = boxes.get(k);
+        mine.intersects_boxed(if top { &b.top } else { &b.triangles })
+    })
+}
+
+/// [`pose_is_clear`], and with `tops` also clear of every [`raised_top`]
+/// (last: most poses that fail, fail before it; testing the tops before
+/// the body took 3 % more instructions in `adjust_feather` on the
+/// Flamingo bench).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn exact_check(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    tops: bool,
+    hints: &mut CheckHints,
+) -> bool {
+    let mine = FeatherBoxes::of_feather(frame, shape, pose);
+    boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, tops, hints)
+}
+
+/// The exact tests of [`exact_check`] on triangles (`mine`, the whole
+/// feather at `pose` or a part of it): no obstacle met, no crossing of the
+/// body beyond the root socket, and with `tops` no obstacle's raised top
+/// met.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn boxes_clear(
+    mine: &FeatherBoxes,
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    obstacles: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+    tops: bool,
+    hints: &mut CheckHints,
+) -> bool {
+    if meets_obstacle(mine, obstacles, false, &mut hints.obstacle) {
+        return false;
+    }
+    let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
+    if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
+        return false;
+    }
+    !(tops && meets_obstacle(mine, obstacles, true, &mut hints.top))
+}
+
+/// An obstacle's top: its two triangles raised by its thickness along
+/// their own normals (away from the skin they grow from). A feather clear
+/// of every obstacle's top (tested in [`exact_check`]) and passing
+/// [`pose_is_clear`] stays out of the slab an obstacle fills, except for
+/// parts that end inside it.
+pub(super) fn raised_top(triangles: &[[Vec3; 3]], thickness: f32) -> FeatherTriangles {
+    let raise = |t: &[Vec3; 3]| {
+        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * thickness;
+        [t[0] + n, t[1] + n, t[2] + n]
+    };
+    let mut top = FeatherTriangles::from_slice(triangles);
+    for (t, raised) in top.iter_mut().zip(triangles.iter().map(raise)) {
+        *t = raised;
+    }
+    top
+}
