@@ -7,10 +7,9 @@
 use super::checks::{BoxesOf, CheckHints, boxes_clear, exact_check};
 use super::{AdjustParams, HeightField};
 use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_triangles};
+use crate::feather::{FeatherPose, FeatherShape, segment_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
-use glam::Vec3;
 
 /// Angle steps (radians) of the descent of a segment in [`drape`]; the
 /// first contact found is then narrowed by [`DRAPE_BISECTIONS`] halvings
@@ -280,29 +279,15 @@ fn segment_check(
     scratch: &mut HeightField,
     hints: &mut CheckHints,
 ) -> bool {
-    let all = feather_triangles(frame, shape, pose);
-    let mine = FeatherBoxes::of_flat_part(&segment_triangles(&all, shape, segment), frame, shape, pose);
+    let mine = FeatherBoxes::of_flat_part(&segment_triangles(frame, shape, pose, segment), frame, shape, pose);
     boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, true, hints)
-}
-
-/// The triangles of segment `segment` of a segmented feather, from its
-/// triangles in the order of [`feather_triangles`] (per vane, the fans of
-/// its [`ShaftPlan`](crate::feather::ShaftPlan) from the root).
-fn segment_triangles(all: &[[Vec3; 3]], shape: &FeatherShape, segment: usize) -> FeatherTriangles {
-    let plan = shape.shaft_plan();
-    let per_vane = plan.triangles_per_vane();
-    let start = if segment == 0 { 0 } else { plan.triangles_per_vane_up_to(segment - 1) };
-    let end = plan.triangles_per_vane_up_to(segment);
-    let n = end - start;
-    let mut part = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
-    part[..n].copy_from_slice(&all[start..end]);
-    part[n..2 * n].copy_from_slice(&all[per_vane + start..per_vane + end]);
-    FeatherTriangles::from_slice(&part[..2 * n])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::feather::feather_triangles;
+    use glam::Vec3;
 
     #[test]
     fn every_segment_of_a_bent_rolled_feather_is_flat() {
@@ -320,7 +305,8 @@ mod tests {
             pose.bends[..3].copy_from_slice(&[0.4 - 0.3 * k as f32, -0.4, 0.25]);
             let all = feather_triangles(&frame, &shape, pose);
             for segment in 0..4 {
-                let part = segment_triangles(&all, &shape, segment);
+                let part = segment_triangles(&frame, &shape, pose, segment);
+                assert_eq!(&part[..], &segment_of(&all, &shape, segment)[..], "segment {segment} of {pose:?}");
                 let margin = posed_margin_for_test(&frame, &shape, pose);
                 let plane = crate::validation::FlatPlane::of_flat_triangles(&part, margin).unwrap();
                 for t in part.iter() {
@@ -337,6 +323,16 @@ mod tests {
                 assert!(plane.apart(&[off, off, off]));
             }
         }
+    }
+
+    /// Segment `segment`'s triangles taken from the whole feather's (per
+    /// vane, the fans of its plan from the root).
+    fn segment_of(all: &[[Vec3; 3]], shape: &FeatherShape, segment: usize) -> Vec<[Vec3; 3]> {
+        let plan = shape.shaft_plan();
+        let per_vane = plan.triangles_per_vane();
+        let start = if segment == 0 { 0 } else { plan.triangles_per_vane_up_to(segment - 1) };
+        let end = plan.triangles_per_vane_up_to(segment);
+        [&all[start..end], &all[per_vane + start..per_vane + end]].concat()
     }
 
     fn posed_margin_for_test(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> f32 {

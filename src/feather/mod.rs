@@ -14,8 +14,8 @@ mod shape;
 
 pub use mesh::{FeatherMesh, FeatherMeshLayout};
 pub use pose::{
-    FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, pose_change, shaft_direction,
-    tip_position, toward, triangles_per_feather,
+    FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, pose_change, segment_triangles,
+    shaft_direction, tip_position, toward, triangles_per_feather,
 };
 pub use shape::{FeatherShape, MAX_JOINTS, MAX_SEGMENTS, MAX_STATIONS, ShaftPlan};
 pub(crate) use shape::{LENGTH_PER_SPACING, WIDTH_PER_SPACING};

@@ -199,6 +199,34 @@ pub fn feather_triangles(frame: &RootFrame, shape: &FeatherShape, pose: FeatherP
     out
 }
 
+/// The triangles of segment `segment` (from the root) of a posed
+/// segmented feather: per vane, that segment's fan, +y vane first; the
+/// same triangles, bit for bit and in the same order, as that segment's in
+/// [`feather_triangles`], without computing the others.
+pub fn segment_triangles(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    pose: FeatherPose,
+    segment: usize,
+) -> FeatherTriangles {
+    let rotation = pose.rotation();
+    let scaled = shape.scaled(pose.scale);
+    let shaft = ShaftPoints::of(&scaled, &pose);
+    let world = |p: Vec3| frame.to_world(rotation.apply(p));
+    let (start, end) = (world(shaft.points[segment]), world(shaft.points[segment + 1]));
+    let mut out = FeatherTriangles { triangles: [[Vec3::ZERO; 3]; MAX_TRIANGLES], len: 0 };
+    for side in [1.0f32, -1.0] {
+        let tri = |a: Vec3, b: Vec3, c: Vec3| if side > 0.0 { [a, b, c] } else { [a, c, b] };
+        let mut previous = end;
+        for (_, f) in shaft.plan.segment_stations(segment) {
+            let edge = world(shaft.edge_point(f, side));
+            out.push(tri(start, previous, edge));
+            previous = edge;
+        }
+    }
+    out
+}
+
 /// The shaft polyline of a segmented feather in its unrolled, unpitched
 /// frame (x along the shaft at the root, z up), by its [`ShaftPlan`].
 /// Joint k turns the segments after it by `bends[k − 1]` about the
