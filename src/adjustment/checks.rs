@@ -13,7 +13,7 @@ use crate::geometry::RootFrame;
 use crate::validation::{BoxedTriangles, FeatherBoxes};
 use glam::Vec3;
 
-/// Where an obstacle must reach to matter to [`adjust_feather`] for one
+/// Where an obstacle must reach to matter to [`super::adjust_feather`] for one
 /// feather, at any size it may be given (≤ its shape) and any pose. An
 /// obstacle, bounded by a sphere, matters when it may be rasterised (it
 /// meets the column over the grid, from the lowest floor up) or may meet
@@ -92,7 +92,7 @@ pub(crate) fn pose_is_clear(
     pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes }, body, scratch)
 }
 
-/// [`pose_is_clear`] with the obstacles' [`ObstacleBoxes`] made already.
+/// `pose_is_clear` with the obstacles' [`ObstacleBoxes`] made already.
 pub(crate) fn pose_is_clear_boxed(
     frame: &RootFrame,
     shape: &FeatherShape,
@@ -206,7 +206,7 @@ fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut
     })
 }
 
-/// [`pose_is_clear`], and with `tops` also clear of every [`raised_top`]
+/// `pose_is_clear`, and with `tops` also clear of every [`raised_top`]
 /// (last: most poses that fail, fail before it; testing the tops before
 /// the body took 3 % more instructions in `adjust_feather` on the
 /// Flamingo bench).
@@ -254,7 +254,7 @@ pub(super) fn boxes_clear(
 /// An obstacle's top: its two triangles raised by its thickness along
 /// their own normals (away from the skin they grow from). A feather clear
 /// of every obstacle's top (tested in [`exact_check`]) and passing
-/// [`pose_is_clear`] stays out of the slab an obstacle fills, except for
+/// `pose_is_clear` stays out of the slab an obstacle fills, except for
 /// parts that end inside it.
 pub(super) fn raised_top(triangles: &[[Vec3; 3]], thickness: f32) -> FeatherTriangles {
     let raise = |t: &[Vec3; 3]| {

@@ -24,6 +24,7 @@ mod drape;
 mod height_field;
 mod levels;
 mod pitch_roll;
+mod settle;
 mod steps;
 
 pub use height_field::HeightField;

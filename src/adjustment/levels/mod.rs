@@ -1,0 +1,591 @@
+//! Adjusting many feathers in order, in parallel by levels.
+//!
+//! The obstacles of feather i are its candidates (roots within reach) that
+//! come earlier in the adjustment order. Give every feather to be adjusted a
+//! level: 1 + the highest level among its obstacles that are adjusted too
+//! (feathers kept fixed count as level 0). A feather reads only obstacles of
+//! lower levels, which are final by the time its level runs, and never a
+//! feather of its own level, so running each level in parallel gives
+//! exactly the serial result, whatever the thread count. Effects are applied
+//! after each level, in a fixed order.
+
+use super::checks::{ObstacleBoxes, bounding_sphere};
+use super::{AdjustParams, AdjustSteps, HeightField};
+use crate::body::BodyIndex;
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
+use crate::geometry::RootFrame;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+#[cfg(test)]
+mod tests;
+mod visit;
+
+use super::settle::tip_above;
+pub use visit::{CandidateLists, Selection};
+use visit::{Inputs, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level};
+
+/// Work chunks per worker thread in one level (load balance vs. overhead).
+const CHUNKS_PER_THREAD: usize = 4;
+/// Figures of one ordered adjustment.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AdjustStats {
+    /// Feathers adjusted.
+    pub adjusted: usize,
+    /// Obstacle feathers rasterised, summed over adjusted feathers.
+    pub collision_tests: u64,
+    /// Adjusted feathers where a pitch or roll limit bound.
+    pub clamped: usize,
+    /// Feathers checked exactly and left as they were
+    /// ([`Selection::Verify`]).
+    pub verified: usize,
+    /// Levels run (the length of the longest obstacle chain).
+    pub levels: usize,
+    /// Wall-clock time of the call.
+    pub seconds: f64,
+}
+
+impl AdjustStats {
+    /// Mean collision detections per adjusted feather (0 when none).
+    pub fn collision_tests_per_feather(&self) -> f64 {
+        if self.adjusted == 0 { 0.0 } else { self.collision_tests as f64 / self.adjusted as f64 }
+    }
+}
+
+/// Reusable state of ordered adjustments: level lists, feather triangles
+/// and per-worker scratch. Keep one per system; after the first frames
+/// nothing it holds grows unless the feather count or thread count does.
+#[derive(Clone, Debug, Default)]
+pub struct Adjuster {
+    triangles: Vec<FeatherTriangles>,
+    /// A bounding sphere of each feather's triangles (centre, radius).
+    spheres: Vec<(Vec3, f32)>,
+    /// Each feather's triangles and raised top with their boxes, as the
+    /// exact checks of the feathers it is an obstacle of meet them.
+    boxes: Vec<ObstacleBoxes>,
+    in_scope: Vec<bool>,
+    level: Vec<u32>,
+    moved: Vec<bool>,
+    changed: Vec<bool>,
+    adjusted: Vec<bool>,
+    verified: Vec<bool>,
+    level_start: Vec<u32>,
+    level_items: Vec<u32>,
+    cursor: Vec<u32>,
+    outcomes: Vec<Visit>,
+    workers: Vec<Worker>,
+    /// The settle rate of the next run only (see [`Adjuster::settle_next_run`]).
+    settle_rate: f32,
+    /// Which feathers the last run held back from their solved pose.
+    settling: Vec<bool>,
+    /// Verifying by levels on several threads: the suspects checked ahead
+    /// of the ordered pass, in parallel, against their obstacles as they
+    /// were before it ([`Precheck`]), by feather.
+    prechecked: Vec<Precheck>,
+    /// The feathers checked ahead, in order.
+    precheck_items: Vec<u32>,
+    precheck_outcomes: Vec<Precheck>,
+}
+
+impl Adjuster {
+    /// Empty state; buffers grow on first use.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Which feathers the last call adjusted.
+    pub fn adjusted(&self) -> &[bool] {
+        &self.adjusted
+    }
+
+    /// Which feathers the last call checked exactly and left as they were
+    /// ([`Selection::Verify`]).
+    pub fn verified(&self) -> &[bool] {
+        &self.verified
+    }
+
+    /// The next run (only) moves each adjusted feather from its current
+    /// pose toward its solved pose by at most `rate` radians in pitch, roll
+    /// and each bend, when that pose passes the exact checks; otherwise it
+    /// lifts it from there by the smallest of a few pitch steps that
+    /// passes, else takes the solved pose (see
+    /// [`crate::animation::coherence`]). 0 takes the solved pose.
+    pub fn settle_next_run(&mut self, rate: f32) {
+        self.settle_rate = rate;
+    }
+
+    /// Which feathers the last run held back from their solved pose (they
+    /// settle further in later frames).
+    pub fn settling(&self) -> &[bool] {
+        &self.settling
+    }
+
+    /// Replaces what [`adjusted`](Self::adjusted) reports, e.g. with the
+    /// flags saved with a frame that is being resumed.
+    pub fn set_adjusted(&mut self, flags: &[bool]) {
+        self.adjusted.clear();
+        self.adjusted.extend_from_slice(flags);
+    }
+
+    /// Room in every worker for `longest` obstacles, so that a later call
+    /// with rows up to that long allocates nothing (a frame whose second
+    /// pass uses longer rows than the first may come late).
+    pub fn reserve_obstacles(&mut self, longest: usize) {
+        self.workers.iter_mut().for_each(|w| {
+            w.obstacles.reserve(longest.saturating_sub(w.obstacles.len()));
+            w.obstacle_ids.reserve(longest.saturating_sub(w.obstacle_ids.len()));
+        });
+    }
+
+    /// Every feather's two triangles at the poses left by the last call.
+    pub fn triangles(&self) -> &[FeatherTriangles] {
+        &self.triangles
+    }
+
+    /// Adjusts the selected feathers in `order` (`order[k]` is the k-th
+    /// feather; `rank` is its inverse). Feather i's obstacles are its
+    /// `candidates` with a smaller rank, at their current poses (adjusted
+    /// ones at their new poses). `poses` holds the current poses and
+    /// receives the new ones. Runs on the current rayon pool; the result is
+    /// bitwise the same for any thread count.
+    ///
+    /// Panics if the slices disagree in length.
+    #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_in_order(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+    ) -> AdjustStats {
+        let all = self.adjust_in_order_until(
+            frames,
+            shapes,
+            poses,
+            order,
+            rank,
+            candidates,
+            body,
+            params,
+            steps,
+            selection,
+            &|_| true,
+        );
+        all.unwrap_or_default()
+    }
+
+    /// As [`Adjuster::adjust_in_order`], asking `keep_going(fraction done)`
+    /// before each level; `None` when it says stop (then `poses` holds a
+    /// mix of old and new poses and the caller must restore them).
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_in_order_until(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (false, false))
+    }
+
+    /// As [`Adjuster::adjust_in_order_until`], one feather after the other
+    /// in `order` on the calling thread, visiting only the feathers
+    /// selected and those an adjusted feather listed as a candidate changed
+    /// under. For a few seeds over long candidate rows, where the levels of
+    /// everything downstream would cost more than the adjustments. The
+    /// candidate relation must be symmetric (`j` in row `i` exactly when `i`
+    /// is in row `j`, as with the full obstacle candidates). Meant for a
+    /// second pass over a frame whose first pass has checked the feathers
+    /// against the body: verifying, it tests only the pairs (the body has
+    /// not moved since, and a feather whose pose changes is adjusted with
+    /// every check). Apart from that the result is the same as with
+    /// levels, bitwise: a feather reads only earlier ones, final either
+    /// way, and one that no earlier adjusted feather changed under is left
+    /// alone by both.
+    #[allow(clippy::too_many_arguments)]
+    pub fn adjust_sparse_until(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &mut [FeatherPose],
+        order: &[u32],
+        rank: &[u32],
+        candidates: CandidateLists<'_>,
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+    ) -> Option<AdjustStats> {
+        let lists = (frames, shapes, order, rank, candidates);
+        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (true, true))
+    }
+
+    /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
+    /// `sparse`, verifying with every check or the pairs only (see
+    /// [`Adjuster::adjust_sparse_until`]).
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn ordered_run(
+        &mut self,
+        (frames, shapes, order, rank, candidates): (&[RootFrame], &[FeatherShape], &[u32], &[u32], CandidateLists<'_>),
+        poses: &mut [FeatherPose],
+        body: &BodyIndex,
+        params: &AdjustParams,
+        steps: AdjustSteps,
+        selection: Selection<'_>,
+        keep_going: &dyn Fn(f32) -> bool,
+        (sparse, pairs_only): (bool, bool),
+    ) -> Option<AdjustStats> {
+        let start = Instant::now();
+        let settle_rate = std::mem::take(&mut self.settle_rate);
+        let n = frames.len();
+        assert!(
+            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.len() == n,
+            "adjust_in_order: frames, shapes, poses, order, rank and candidate rows must all have one entry per feather"
+        );
+        match selection {
+            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => {
+                assert_eq!(s.len(), n, "adjust_in_order: the selection needs one flag per feather")
+            }
+            Selection::Verify { seeds, suspects, .. } => assert!(
+                seeds.len() == n && suspects.len() == n,
+                "adjust_in_order: the selection needs one flag per feather"
+            ),
+            Selection::All => {}
+        }
+        self.posed_triangles(frames, shapes, poses);
+        let levels = if sparse {
+            self.mark_selected(n, selection);
+            0
+        } else {
+            self.mark_scope(order, rank, candidates, selection);
+            self.assign_levels(order, rank, candidates)
+        };
+        self.prepare_workers(params);
+        // Room for the longest row up front: which rows a worker meets
+        // varies from frame to frame, and its buffer must not creep up.
+        let longest = (0..n).map(|i| candidates.of(i).len()).max().unwrap_or(0);
+        self.reserve_obstacles(longest);
+        // Body queries list each triangle at most once; a rare wide query
+        // (a skin search widening far from the feather) must not grow them.
+        let triangles = body.triangle_count();
+        self.workers
+            .iter_mut()
+            .for_each(|w| w.field.body_ids.reserve(triangles.saturating_sub(w.field.body_ids.len())));
+        self.moved.clear();
+        self.moved.resize(n, false);
+        self.changed.clear();
+        self.changed.resize(n, false);
+        self.adjusted.clear();
+        self.adjusted.resize(n, false);
+        self.verified.clear();
+        self.verified.resize(n, false);
+        self.settling.clear();
+        self.settling.resize(n, false);
+
+        let mut stats = AdjustStats { levels, ..AdjustStats::default() };
+        let inputs =
+            Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only, settle_rate };
+        self.prechecked.clear();
+        self.prechecked.resize(n, Precheck::None);
+        if !sparse && rayon::current_num_threads() > 1 {
+            self.precheck(&inputs, order, poses);
+        }
+        if sparse {
+            for (k, &i) in order.iter().enumerate() {
+                if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
+                    return None;
+                }
+                let i = i as usize;
+                if !self.in_scope[i] {
+                    continue;
+                }
+                let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
+                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+                let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
+                self.apply(i, &visit, &inputs, poses, &mut stats);
+                if self.changed[i] {
+                    // What lies on it may now meet it or stand on nothing.
+                    for &j in candidates.of(i) {
+                        if rank[j as usize] > rank[i] {
+                            self.in_scope[j as usize] = true;
+                        }
+                    }
+                }
+            }
+            stats.levels = usize::from(stats.adjusted + stats.verified > 0);
+            stats.seconds = start.elapsed().as_secs_f64();
+            return Some(stats);
+        }
+        for l in 0..levels {
+            if !keep_going(l as f32 / levels.max(1) as f32) {
+                return None;
+            }
+            let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
+            let outcomes = &mut self.outcomes[..items.len()];
+            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
+            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+            run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
+            let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
+            for k in 0..end - start {
+                let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
+                self.apply(i, &outcome, &inputs, poses, &mut stats);
+            }
+        }
+        stats.seconds = start.elapsed().as_secs_f64();
+        Some(stats)
+    }
+
+    /// Verifying: checks every suspect that is not a seed (those the
+    /// ordered pass will most likely only check) ahead, in parallel chunks,
+    /// against the poses before the pass. Most checked feathers have no
+    /// obstacle that the pass changes before their turn, and their level
+    /// then takes this answer instead of checking again; it is the answer
+    /// the check would give there (same pose, same obstacles, same body),
+    /// so the result does not change, at any thread count. This spreads
+    /// the checks over the threads whatever the levels are: the obstacle
+    /// relation runs through thousands of levels of a few feathers.
+    fn precheck(&mut self, inputs: &Inputs<'_>, order: &[u32], poses: &[FeatherPose]) {
+        let Selection::Verify { seeds, suspects, .. } = inputs.selection else { return };
+        // Sized for every feather up front: how many are checked ahead
+        // varies from frame to frame, and the heap must not creep up.
+        let n = order.len();
+        self.precheck_items.clear();
+        self.precheck_items.reserve(n);
+        self.precheck_outcomes.reserve(n.saturating_sub(self.precheck_outcomes.len()));
+        self.precheck_items.extend(order.iter().copied().filter(|&i| {
+            let i = i as usize;
+            self.in_scope[i] && suspects[i] && !seeds[i]
+        }));
+        let items = &self.precheck_items;
+        self.precheck_outcomes.clear();
+        self.precheck_outcomes.resize(items.len(), Precheck::None);
+        let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+        let chunk = items.len().div_ceil(self.workers.len()).max(1);
+        items
+            .par_chunks(chunk)
+            .zip(self.precheck_outcomes.par_chunks_mut(chunk))
+            .zip(self.workers.par_iter_mut())
+            .for_each(|((items, outcomes), worker)| {
+                for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+                    let i = i as usize;
+                    collect_obstacle_ids(inputs, i, posed, worker);
+                    *out =
+                        if check_clear(inputs, i, poses, posed, worker) { Precheck::Clear } else { Precheck::Blocked };
+                }
+            });
+        for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
+            self.prechecked[i as usize] = outcome;
+        }
+    }
+
+    /// Records what became of feather `i`; an adjusted feather takes its
+    /// new pose (and triangles) and is marked moved past the threshold or
+    /// changed at all.
+    fn apply(
+        &mut self,
+        i: usize,
+        visit: &Visit,
+        inputs: &Inputs<'_>,
+        poses: &mut [FeatherPose],
+        stats: &mut AdjustStats,
+    ) {
+        let (frames, shapes, selection) = (inputs.frames, inputs.shapes, inputs.selection);
+        let (o, solved) = match visit {
+            Visit::Adjusted(o, solved) => (o, solved),
+            Visit::Verified => {
+                self.verified[i] = true;
+                stats.verified += 1;
+                return;
+            }
+            Visit::Skipped => return,
+        };
+        let old = poses[i];
+        if let Some(threshold) = selection.threshold() {
+            // Judged by the solved pose: a feather held back while it
+            // settles pulls in what lies on it as long as it is still to
+            // sink that far, so they settle along with it.
+            let rolled = (solved.roll - old.roll).abs() > threshold;
+            self.moved[i] = rolled
+                || if matches!(selection, Selection::Verify { .. }) {
+                    // A feather that rose or grew is checked against
+                    // by what lies on it; only one that sank or
+                    // shrank can leave them standing on nothing.
+                    old.pitch - solved.pitch > threshold || old.scale - solved.scale > threshold
+                } else {
+                    (solved.pitch - old.pitch).abs() > threshold
+                };
+        }
+        self.settling[i] = o.pose != *solved && tip_above(&frames[i], &shapes[i], o.pose, *solved);
+        self.changed[i] = o.pose != old;
+        poses[i] = o.pose;
+        self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
+        self.spheres[i] = bounding_sphere(&self.triangles[i]);
+        self.boxes[i] = ObstacleBoxes::new(&self.triangles[i], shapes[i].thickness);
+        self.adjusted[i] = true;
+        stats.adjusted += 1;
+        stats.collision_tests += u64::from(o.collision_tests);
+        stats.clamped += usize::from(o.clamped);
+    }
+
+    /// The scope of a sparse run to begin with: the selected feathers.
+    fn mark_selected(&mut self, n: usize, selection: Selection<'_>) {
+        self.in_scope.clear();
+        match selection {
+            Selection::All => self.in_scope.resize(n, true),
+            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => self.in_scope.extend_from_slice(s),
+            Selection::Verify { seeds, suspects, .. } => {
+                self.in_scope.extend(seeds.iter().zip(suspects).map(|(&s, &v)| s | v))
+            }
+        }
+    }
+
+    /// Every feather's triangles at its current pose, and their spheres.
+    fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
+        self.triangles.resize(frames.len(), FeatherTriangles::kite([[Vec3::ZERO; 3]; 2]));
+        self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
+        let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
+        self.boxes.resize(frames.len(), unset);
+        self.triangles
+            .par_iter_mut()
+            .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut()))
+            .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
+            .for_each(|((t, (sphere, boxes)), (f, (s, p)))| {
+                *t = feather_triangles(f, s, *p);
+                *sphere = bounding_sphere(t);
+                *boxes = ObstacleBoxes::new(t, s.thickness);
+            });
+    }
+
+    /// Marks the feathers that may be adjusted. With propagation that is
+    /// the seeds (and suspects) and everything downstream of them in the
+    /// obstacle relation.
+    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>, selection: Selection<'_>) {
+        let n = order.len();
+        self.in_scope.clear();
+        match selection {
+            Selection::All => self.in_scope.resize(n, true),
+            Selection::Subset(s) => self.in_scope.extend_from_slice(s),
+            Selection::Propagate { seeds, .. } | Selection::Verify { seeds, .. } => {
+                self.in_scope.extend_from_slice(seeds);
+                if let Selection::Verify { suspects, .. } = selection {
+                    self.in_scope.iter_mut().zip(suspects).for_each(|(s, &v)| *s |= v);
+                }
+                for &i in order {
+                    let i = i as usize;
+                    if !self.in_scope[i] {
+                        let ri = rank[i];
+                        self.in_scope[i] =
+                            candidates.of(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Levels of the feathers in scope and the per-level lists (each in
+    /// order). Returns the number of levels.
+    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>) -> usize {
+        let n = order.len();
+        self.level.clear();
+        self.level.resize(n, 0);
+        let mut levels = 0u32;
+        for &i in order {
+            let i = i as usize;
+            if !self.in_scope[i] {
+                continue;
+            }
+            let ri = rank[i];
+            let below = candidates
+                .of(i)
+                .iter()
+                .filter(|&&j| rank[j as usize] < ri)
+                .map(|&j| self.level[j as usize])
+                .max()
+                .unwrap_or(0);
+            self.level[i] = below + 1;
+            levels = levels.max(below + 1);
+        }
+        let levels = levels as usize;
+        // Level lists sized for the worst case (one feather per level, or
+        // all in one) from the start, so that sparse frames never grow them.
+        self.level_start.clear();
+        self.level_start.reserve(n + 1);
+        self.cursor.reserve(n.saturating_sub(self.cursor.len()));
+        self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
+        self.level_start.resize(levels + 1, 0);
+        for &i in order {
+            let l = self.level[i as usize] as usize;
+            if l > 0 {
+                self.level_start[l] += 1;
+            }
+        }
+        for l in 0..levels {
+            self.level_start[l + 1] += self.level_start[l];
+        }
+        self.level_items.clear();
+        self.level_items.resize(self.level_start[levels] as usize, 0);
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.level_start[..levels]);
+        for &i in order {
+            let l = self.level[i as usize] as usize;
+            if l > 0 {
+                self.level_items[self.cursor[l - 1] as usize] = i;
+                self.cursor[l - 1] += 1;
+            }
+        }
+        let widest = (0..levels).map(|l| (self.level_start[l + 1] - self.level_start[l]) as usize).max().unwrap_or(0);
+        if self.outcomes.len() < widest {
+            self.outcomes.resize(widest, Visit::Skipped);
+        }
+        levels
+    }
+
+    /// One scratch per possible work chunk of the current pool.
+    fn prepare_workers(&mut self, params: &AdjustParams) {
+        let wanted = rayon::current_num_threads().max(1) * CHUNKS_PER_THREAD;
+        while self.workers.len() < wanted {
+            self.workers.push(Worker {
+                field: HeightField::new(params.height_field_u, params.height_field_v),
+                obstacles: Vec::new(),
+                obstacle_ids: Vec::new(),
+            });
+        }
+    }
+}
+
+/// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or
+/// only those marked in `subset` (the others stay as fixed obstacles). For
+/// repeated use (every frame) keep an [`Adjuster`] instead.
+#[allow(clippy::too_many_arguments)]
+pub fn adjust_in_order(
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &mut [FeatherPose],
+    order: &[u32],
+    rank: &[u32],
+    candidates: CandidateLists<'_>,
+    body: &BodyIndex,
+    params: &AdjustParams,
+    steps: AdjustSteps,
+    subset: Option<&[bool]>,
+) -> AdjustStats {
+    let selection = subset.map_or(Selection::All, Selection::Subset);
+    Adjuster::new().adjust_in_order(frames, shapes, poses, order, rank, candidates, body, params, steps, selection)
+}

@@ -1,0 +1,340 @@
+//! One feather's turn in an ordered run: skipped, verified where it lies,
+//! or adjusted (and settled); what every feather of a level reads, and the
+//! parallel run of one level.
+
+use super::super::checks::{BoxesOf, ObstacleBoxes, ObstacleReach, pose_is_clear_boxed};
+use super::super::settle::{SettlingFeather, settled_pose};
+use super::super::steps::adjust_feather_boxed;
+use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
+use crate::body::BodyIndex;
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
+use crate::geometry::RootFrame;
+use crate::validation::FeatherBoxes;
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Obstacles whose root normal is more than 120° from the adjusted
+/// feather's grow from the far side of a thin part (see
+/// [`ObstacleFeather::far_side`]).
+const FAR_SIDE_NORMAL_DOT: f32 = -0.5;
+
+/// Candidate lists in compressed rows: the candidates of root `i` are
+/// `indices[offsets[i]..offsets[i + 1]]` (roots within reach, any order).
+#[derive(Clone, Copy, Debug)]
+pub struct CandidateLists<'a> {
+    /// Row starts, one more than the number of roots.
+    pub offsets: &'a [u32],
+    /// Concatenated candidate indices.
+    pub indices: &'a [u32],
+}
+
+impl<'a> CandidateLists<'a> {
+    /// Wraps CSR arrays.
+    pub fn new(offsets: &'a [u32], indices: &'a [u32]) -> Self {
+        Self { offsets, indices }
+    }
+
+    /// The candidates of root `i`.
+    #[inline]
+    pub fn of(&self, i: usize) -> &'a [u32] {
+        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
+    }
+
+    /// Number of roots described.
+    pub fn len(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Whether no root is described.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Which feathers an ordered adjustment touches.
+#[derive(Clone, Copy, Debug)]
+pub enum Selection<'a> {
+    /// Every feather.
+    All,
+    /// Only the marked feathers; the others are fixed obstacles.
+    Subset(&'a [bool]),
+    /// The marked feathers, plus (in order) every feather one of whose
+    /// obstacles was adjusted and moved by more than `threshold` radians in
+    /// pitch or roll (DESIGN.md §5, step 4, θs).
+    Propagate {
+        /// Feathers adjusted in any case.
+        seeds: &'a [bool],
+        /// θs, radians.
+        threshold: f32,
+    },
+    /// As [`Propagate`](Self::Propagate), and besides: a feather marked in
+    /// `suspects`, or one of whose obstacles was adjusted at all, is checked
+    /// exactly at its current pose (the validation's tests against its
+    /// obstacles, at their final poses, and the body) and adjusted when the
+    /// check fails. A frame can then leave alone feathers whose
+    /// surroundings moved a little, without letting them intersect. Here
+    /// propagation passes on only what can leave a feather standing on
+    /// nothing: an obstacle that sank (pitch) or shrank (scale) by more
+    /// than `threshold`, or rolled by more than it either way; one that
+    /// rose or grew into a feather fails that feather's exact check.
+    Verify {
+        /// Feathers adjusted in any case.
+        seeds: &'a [bool],
+        /// Feathers checked in any case.
+        suspects: &'a [bool],
+        /// θs, radians.
+        threshold: f32,
+    },
+}
+
+impl Selection<'_> {
+    /// Feathers adjusted in any case, for the propagating selections.
+    pub(super) fn seeds(&self) -> Option<&[bool]> {
+        match *self {
+            Self::Propagate { seeds, .. } | Self::Verify { seeds, .. } => Some(seeds),
+            Self::All | Self::Subset(_) => None,
+        }
+    }
+
+    /// θs of the propagating selections.
+    pub(super) fn threshold(&self) -> Option<f32> {
+        match *self {
+            Self::Propagate { threshold, .. } | Self::Verify { threshold, .. } => Some(threshold),
+            Self::All | Self::Subset(_) => None,
+        }
+    }
+}
+
+/// Scratch of one work chunk.
+#[derive(Clone, Debug)]
+pub(super) struct Worker {
+    pub(super) field: HeightField,
+    pub(super) obstacles: Vec<ObstacleFeather>,
+    /// The feather index of each obstacle.
+    pub(super) obstacle_ids: Vec<u32>,
+}
+
+/// The answer of an exact check made ahead of the ordered pass. It stands
+/// for the check the ordered pass would make as long as no obstacle of the
+/// feather changed pose before its turn (the check reads only the
+/// feather's own pose, its obstacles' poses and the body).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) enum Precheck {
+    /// Not checked ahead.
+    #[default]
+    None,
+    /// The pose was clear.
+    Clear,
+    /// The pose met an obstacle or the body.
+    Blocked,
+}
+
+/// The read-only inputs of every feather of a level.
+pub(super) struct Inputs<'a> {
+    pub(super) frames: &'a [RootFrame],
+    pub(super) shapes: &'a [FeatherShape],
+    pub(super) rank: &'a [u32],
+    pub(super) candidates: CandidateLists<'a>,
+    pub(super) body: &'a BodyIndex,
+    pub(super) params: &'a AdjustParams,
+    pub(super) steps: AdjustSteps,
+    pub(super) selection: Selection<'a>,
+    /// Verification tests the pairs only (see [`super::Adjuster::adjust_sparse_until`]).
+    pub(super) pairs_only: bool,
+    /// See [`super::Adjuster::settle_next_run`]; 0 = the solved poses.
+    pub(super) settle_rate: f32,
+}
+
+/// What became of one feather of a level.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum Visit {
+    /// Propagation did not reach it.
+    Skipped,
+    /// Its pose passed the exact check and stays.
+    Verified,
+    /// It was adjusted: the pose it takes, and the pose solved for it
+    /// (the same unless it settles toward it, see
+    /// [`super::Adjuster::settle_next_run`]).
+    Adjusted(AdjustOutcome, FeatherPose),
+}
+
+/// What the levels run so far did to each feather: moved past θs, or
+/// changed at all.
+#[derive(Clone, Copy)]
+pub(super) struct Marks<'a> {
+    pub(super) moved: &'a [bool],
+    pub(super) changed: &'a [bool],
+    /// Answers of the checks made ahead ([`super::Adjuster::precheck`]).
+    pub(super) prechecked: &'a [Precheck],
+}
+
+/// Every feather's triangles at its current pose and a sphere around them.
+#[derive(Clone, Copy)]
+pub(super) struct Posed<'a> {
+    pub(super) triangles: &'a [FeatherTriangles],
+    pub(super) spheres: &'a [(Vec3, f32)],
+    pub(super) boxes: &'a [ObstacleBoxes],
+}
+
+/// Levels with fewer feathers than this are visited on the calling thread.
+const PARALLEL_LEVEL_MIN: usize = 4;
+
+/// Adjusts the feathers of one level, in parallel chunks when it is large
+/// enough; each chunk has its own worker scratch. Results land in
+/// `outcomes` by position.
+pub(super) fn run_level(
+    inputs: &Inputs<'_>,
+    items: &[u32],
+    poses: &[FeatherPose],
+    posed: Posed<'_>,
+    marks: Marks<'_>,
+    outcomes: &mut [Visit],
+    workers: &mut [Worker],
+) {
+    // Waking another thread costs about as much as checking a feather, and
+    // most levels hold one or two: those run on this thread. Which worker
+    // visits a feather never changes what it finds.
+    let visit = |items: &[u32], outcomes: &mut [Visit], worker: &mut Worker| {
+        for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+            *out = adjust_one(inputs, i as usize, poses, posed, marks, worker);
+        }
+    };
+    if items.len() < PARALLEL_LEVEL_MIN || workers.len() == 1 {
+        visit(items, outcomes, &mut workers[0]);
+        return;
+    }
+    let chunk = items.len().div_ceil(workers.len()).max(1);
+    items
+        .par_chunks(chunk)
+        .zip(outcomes.par_chunks_mut(chunk))
+        .zip(workers.par_iter_mut())
+        .for_each(|((items, outcomes), worker)| visit(items, outcomes, worker));
+}
+
+/// Adjusts feather `i` against its earlier candidates, unless propagation
+/// does not reach it or, verifying, its pose passes the exact check.
+/// Candidates that cannot matter to it at any size and pose (see
+/// [`ObstacleReach`]) are not passed on.
+pub(super) fn adjust_one(
+    inputs: &Inputs<'_>,
+    i: usize,
+    poses: &[FeatherPose],
+    posed: Posed<'_>,
+    marks: Marks<'_>,
+    worker: &mut Worker,
+) -> Visit {
+    let ri = inputs.rank[i];
+    let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
+    let mut verify = false;
+    if let Some(seeds) = inputs.selection.seeds()
+        && !seeds[i]
+        && !earlier.clone().any(|j| marks.moved[j])
+    {
+        let Selection::Verify { suspects, .. } = inputs.selection else { return Visit::Skipped };
+        // A changed obstacle that cannot matter to i at any size and pose
+        // is left out of its checks anyway.
+        let matters = |j: usize| {
+            let (centre, radius) = posed.spheres[j];
+            reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+        };
+        if !suspects[i] && !earlier.clone().any(|j| marks.changed[j] && matters(j)) {
+            return Visit::Skipped;
+        }
+        verify = true;
+    }
+    // A check made ahead stands when no obstacle changed since.
+    let ahead = marks.prechecked.get(i).copied().unwrap_or_default();
+    let ahead = if verify && ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]) {
+        if ahead == Precheck::Clear {
+            return Visit::Verified;
+        }
+        Some(false)
+    } else {
+        None
+    };
+    // The ids first: a check needs only them (and the prepared boxes);
+    // the triangles are copied out only for a feather that is adjusted.
+    collect_obstacle_ids(inputs, i, posed, worker);
+    if verify && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
+        return Visit::Verified;
+    }
+    worker.obstacles.clear();
+    worker.obstacles.extend(worker.obstacle_ids.iter().map(|&j| {
+        let j = j as usize;
+        let (centre, radius) = posed.spheres[j];
+        let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness) == Some(true);
+        ObstacleFeather {
+            triangles: posed.triangles[j],
+            thickness: inputs.shapes[j].thickness,
+            // Out of the column, rasterising would find nothing.
+            far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
+        }
+    }));
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let solved = adjust_feather_boxed(
+        &inputs.frames[i],
+        &inputs.shapes[i],
+        poses[i],
+        &worker.obstacles,
+        boxes,
+        inputs.body,
+        inputs.params,
+        inputs.steps,
+        &mut worker.field,
+    );
+    if inputs.settle_rate <= 0.0 || solved.pose == poses[i] {
+        return Visit::Adjusted(solved, solved.pose);
+    }
+    let feather = SettlingFeather {
+        frame: &inputs.frames[i],
+        shape: &inputs.shapes[i],
+        params: inputs.params,
+        body: inputs.body,
+        rate: inputs.settle_rate,
+    };
+    let pose = settled_pose(feather, poses[i], solved.pose, boxes, &mut worker.field);
+    Visit::Adjusted(AdjustOutcome { pose, ..solved }, solved.pose)
+}
+
+/// Fills `worker.obstacle_ids` with feather `i`'s earlier candidates that
+/// may matter to it at some size and pose (see [`ObstacleReach`]).
+pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: Posed<'_>, worker: &mut Worker) {
+    let ri = inputs.rank[i];
+    let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
+    worker.obstacle_ids.clear();
+    worker.obstacle_ids.extend(
+        inputs
+            .candidates
+            .of(i)
+            .iter()
+            .map(|&j| j as usize)
+            .filter(|&j| inputs.rank[j] < ri)
+            .filter(|&j| {
+                let (centre, radius) = posed.spheres[j];
+                reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
+            })
+            .map(|j| j as u32),
+    );
+}
+
+/// The exact check of feather `i` at its current pose against the
+/// obstacles in `worker.obstacle_ids` (and the body, unless the run tests
+/// the pairs only).
+pub(super) fn check_clear(
+    inputs: &Inputs<'_>,
+    i: usize,
+    poses: &[FeatherPose],
+    posed: Posed<'_>,
+    worker: &mut Worker,
+) -> bool {
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    if inputs.pairs_only {
+        let mine = feather_triangles(frame, shape, poses[i]);
+        let mine = FeatherBoxes::new(&mine);
+        !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
+    } else {
+        let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+        pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
+    }
+}
