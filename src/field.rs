@@ -17,6 +17,7 @@ use crate::config::Config;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::SurfacePoint;
 use crate::mesh::WeldedMesh;
+use crate::spacing::nominal_spacing;
 use crate::surface::Surface;
 use glam::Vec3;
 
@@ -228,13 +229,7 @@ fn check_values(name: &str, values: &[f32], expected: usize, non_negative: bool)
 /// shape's length for the configured spacing, or for the spacing that
 /// spreads the wanted feather count over the whole surface.
 fn nominal_feather_length(surface: &Surface, config: &Config) -> f32 {
-    let spacing = if config.spacing > 0.0 {
-        config.spacing
-    } else {
-        let target = crate::sampling::target_feathers(config) as f64;
-        (surface.rest_area() / (crate::sampling::GUIDED_PACKING * target)).sqrt() as f32
-    };
-    config.length_per_spacing * spacing
+    config.length_per_spacing * nominal_spacing(surface.rest_area(), config)
 }
 
 /// Per vertex, the spacing multiplier the bending of the surface calls for:

@@ -11,7 +11,7 @@
 //! settles a ray grazing an edge or a mesh with holes.
 
 use crate::body::{Aabb, BodyIndex, ray_triangle};
-use crate::validation::triangles_intersect;
+use crate::intersect::triangles_intersect;
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -4,7 +4,7 @@
 //!    and roll relative to their own frame (incremental: neighbourhoods and
 //!    obstacle candidates follow the current pose);
 //! 2. `R_k`: feathers whose surroundings moved relative to them since they
-//!    were last adjusted ([`super::motion::Staleness`]), by more
+//!    were last adjusted ([`crate::coat::Staleness`]), by more
 //!    than `θs·L` (a feather's tip moves that far when its pitch changes by
 //!    θs, the change the propagation rule already lets pass). The
 //!    surroundings are the k nearest roots (their priorities) and the
@@ -42,11 +42,11 @@
 //! still selects the pairs whose priorities are recomputed.
 
 use super::contact::{Contacts, Footprint, Sphere};
-use super::motion::{Oriented, Placement, RootMap, orientation, root_maps};
+use super::motion::{RootMap, root_maps};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
 use crate::body::{Aabb, BodyIndex};
-use crate::coat::{Coat, Dressing, Workspace};
+use crate::coat::{Coat, Dressing, Oriented, Placement, Workspace, orientation};
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::geometry::RootFrame;

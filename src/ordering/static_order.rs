@@ -14,7 +14,7 @@
 //! remaining root still waits on a prior (a cycle), places the root waiting
 //! on the fewest. Only edges in or near cycles then need a search.
 
-use super::dynamic_order::{Edge, PriorityOrder, check_pairs, sanitized_delta};
+use super::order_graph::{Edge, PriorityOrder, check_pairs, sanitized_delta};
 use std::cmp::Reverse;
 use std::time::Instant;
 

@@ -5,18 +5,17 @@
 
 mod coverage;
 mod lie;
-mod tri_tri;
 
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
 pub use lie::{BRISTLE_TIP_HEIGHT, TipHeights, summarise_tip_heights, tip_heights};
 
-use tri_tri::{Prepared, prepared_intersect};
-pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
+pub use crate::intersect::{triangles_intersect, triangles_intersect_f64};
 
 use crate::body::{Aabb, BodyIndex, TriangleGrid};
 use crate::error::Result;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
+use crate::intersect::{Prepared, prepared_intersect};
 use crate::progress::{Phase, Progress};
 use glam::Vec3;
 use rayon::prelude::*;

@@ -5,7 +5,6 @@
 //! `animation::step` and change a coat in place.
 
 use crate::adjustment::{AdjustParams, AdjustSteps, Adjuster, CandidateLists, Selection};
-use crate::animation::motion::Staleness;
 use crate::body::BodyIndex;
 use crate::error::Result;
 use crate::error::{Error, ErrorKind};
@@ -21,6 +20,10 @@ use crate::surface::Surface;
 use crate::{Config, Mode};
 use glam::Vec3;
 use std::time::Instant;
+
+mod staleness;
+
+pub use staleness::{Oriented, Placement, Staleness, orientation};
 
 /// What never changes after creation: the rest binding of every feather and
 /// the parameters derived from the configuration.
