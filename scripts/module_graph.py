@@ -163,10 +163,13 @@ class Crate:
                     found[path[-1]] = path[:-1]
         return found
 
-    def references(self, text):
-        """Every `crate::...` / `super::...` / `self::...` path, expanded."""
+    def references(self, text, reexports=True):
+        """Every `crate::...` / `super::...` / `self::...` path, expanded
+        (with `reexports=False`, leaving out the `pub use` items)."""
         paths = []
-        for _, tree in use_trees(text):
+        for is_pub, tree in use_trees(text):
+            if is_pub and not reexports:
+                continue
             for path in expand(tree):
                 paths.append(path)
         body = re.sub(r"(?m)^\s*(pub(\([^)]*\))?\s+)?use\s+[^;]*;", "", text)
@@ -209,7 +212,7 @@ class Crate:
             if m != mod:
                 continue
             targets = set()
-            for path in self.references(text):
+            for path in self.references(text, reexports=stem != "mod"):
                 if len(path) >= 2 and path[0] == "crate" and path[1] == mod:
                     targets.add(resolve(path[2:]))
                 elif path and path[0] == "super" and stem != "mod":
