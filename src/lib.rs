@@ -33,6 +33,7 @@ pub(crate) mod spacing;
 pub mod stats;
 pub mod surface;
 pub mod system;
+pub mod triangle_grid;
 pub mod validation;
 
 pub use config::{Config, Mode, Preset, SamplerKind};

@@ -20,7 +20,7 @@ use crate::sampling::sample_roots_with_progress;
 use crate::snapshot::{Reader, Writer};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, PartReport, SamplingReport, ValidationReport};
 use crate::surface::Surface;
-use crate::validation::{ProbeSkin, Validation, validate_part, validate_with_progress};
+use crate::validation::{ProbeSkin, Validation, ValidationInput, validate_part, validate_with_progress};
 use glam::Vec3;
 use std::collections::BTreeMap;
 
@@ -251,24 +251,13 @@ impl System {
         self.maybe_test_panic();
         let n = self.dressing.len();
         let tris = self.feather_triangle_sets();
-        let c = &self.coat;
-        let v = self.pool.install(|| {
-            validate_with_progress(
-                &tris,
-                &c.frames,
-                &self.dressing.shapes,
-                &c.poses,
-                &c.body,
-                &ProbeSkin {
-                    positions: &c.positions,
-                    triangles: &self.dressing.triangles,
-                    feathered: &self.dressing.feathered,
-                },
-                coverage_probes(n),
-                self.config.seed,
-                progress,
-            )
-        })?;
+        let skin = ProbeSkin {
+            positions: &self.coat.positions,
+            triangles: &self.dressing.triangles,
+            feathered: &self.dressing.feathered,
+        };
+        let input = self.validation_input(&tris, &skin, coverage_probes(n));
+        let v = self.pool.install(|| validate_with_progress(&input, progress))?;
         Ok(Some(validation_report(&v)))
     }
 
@@ -287,21 +276,31 @@ impl System {
             .map(|(&t, _)| t)
             .collect();
         let tris = self.feather_triangle_sets();
-        let c = &self.coat;
-        let v = self.pool.install(|| {
-            validate_part(
-                &tris,
-                &c.frames,
-                &self.dressing.shapes,
-                &c.poses,
-                &c.body,
-                &ProbeSkin { positions: &c.positions, triangles: &skin, feathered: &self.dressing.feathered },
-                coverage_probes(members),
-                self.config.seed,
-                &member,
-            )
-        });
+        let skin = ProbeSkin { positions: &self.coat.positions, triangles: &skin, feathered: &self.dressing.feathered };
+        let input = self.validation_input(&tris, &skin, coverage_probes(members));
+        let v = self.pool.install(|| validate_part(&input, &member));
         Some(validation_report(&v))
+    }
+
+    /// What a validation of the current coat looks at, with the coverage
+    /// probes drawn on `skin`.
+    fn validation_input<'a>(
+        &'a self,
+        feather_triangles: &'a [FeatherTriangles],
+        skin: &'a ProbeSkin<'a>,
+        probes: usize,
+    ) -> ValidationInput<'a> {
+        let c = &self.coat;
+        ValidationInput {
+            feather_triangles,
+            frames: &c.frames,
+            shapes: &self.dressing.shapes,
+            poses: &c.poses,
+            body: &c.body,
+            skin,
+            probes,
+            seed: self.config.seed,
+        }
     }
 
     /// The last create, step or evaluate's figures restricted to the
