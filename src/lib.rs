@@ -17,6 +17,7 @@ pub mod error;
 pub mod feather;
 pub mod ffi;
 pub mod field;
+pub mod frame;
 pub mod geometry;
 pub mod interior;
 pub mod intersect;

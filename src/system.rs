@@ -3,8 +3,7 @@
 //! (the coat), and is what the FFI handle wraps.
 
 use crate::animation::coherence::{PoseChanges, pose_changes};
-use crate::animation::step::{StepWorkspace, step_coat};
-use crate::coat::{Coat, Dressing, Workspace};
+use crate::coat::{Coat, Dressing};
 use crate::config::SamplerKind;
 use crate::config::{Config, Mode};
 use crate::error::Result;
@@ -12,6 +11,7 @@ use crate::error::{Error, ErrorKind};
 use crate::feather::pose_change;
 use crate::feather::{FeatherMesh, FeatherPose, FeatherTriangles, MAX_TRIANGLES, triangles_per_feather};
 use crate::field::Fields;
+use crate::frame::{StepWorkspace, Workspace};
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
@@ -33,7 +33,6 @@ const COVERAGE_PROBES_MAX: usize = 200_000;
 /// A feathered surface: created at the rest pose, then stepped frame by frame.
 #[derive(Debug)]
 pub struct System {
-    config: Config,
     pool: WorkerPool,
     mesh: WeldedMesh,
     dressing: Dressing,
@@ -115,7 +114,6 @@ impl System {
             seconds: sampling.seconds,
         };
         let mut system = Self {
-            config: config.clone(),
             pool,
             mesh: welded,
             dressing,
@@ -135,7 +133,7 @@ impl System {
         };
         let rest = system.mesh.positions.clone();
         let Self { pool, dressing, coat, work, .. } = &mut system;
-        pool.install(|| coat.solve(dressing, &rest, work, progress))?;
+        pool.install(|| crate::frame::solve(coat, dressing, &rest, work, progress))?;
         system.export();
         system.keep_checkpoint();
         Ok(system)
@@ -156,7 +154,7 @@ impl System {
 
     /// The configuration the system was created with.
     pub fn config(&self) -> &Config {
-        &self.config
+        &self.dressing.config
     }
 
     /// The welded mesh (rest pose).
@@ -299,7 +297,7 @@ impl System {
             body: &c.body,
             skin,
             probes,
-            seed: self.config.seed,
+            seed: self.dressing.config.seed,
         }
     }
 
@@ -317,7 +315,7 @@ impl System {
             r.adjusted += usize::from(readjusted.get(i).copied().unwrap_or(false));
             if let (Some(before), Some(after)) = (self.previous_poses.get(i), self.coat.poses.get(i)) {
                 let change = pose_change(before, after);
-                r.pops += usize::from(change > self.config.pop_threshold);
+                r.pops += usize::from(change > self.dressing.config.pop_threshold);
                 r.largest_pose_change = r.largest_pose_change.max(change);
             }
         }
@@ -351,15 +349,9 @@ impl System {
     pub fn step_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
         self.maybe_test_panic();
         check_frame_positions(positions, self.vertex_count())?;
-        let rebuild = self.dressing.mode == Mode::Rebuild;
         self.transaction(positions, progress, |s, p| {
             let Self { pool, dressing, coat, work, step_work, frame_positions, .. } = s;
-            if rebuild {
-                coat.frame_index += 1;
-                pool.install(|| coat.solve(dressing, frame_positions, work, p))
-            } else {
-                pool.install(|| step_coat(coat, dressing, frame_positions, work, step_work, p))
-            }
+            pool.install(|| crate::frame::advance(coat, dressing, frame_positions, work, step_work, p))
         })?;
         self.keep_checkpoint();
         Ok(())
@@ -377,7 +369,7 @@ impl System {
         check_frame_positions(positions, self.vertex_count())?;
         self.transaction(positions, progress, |s, p| {
             let Self { pool, dressing, coat, work, frame_positions, .. } = s;
-            pool.install(|| coat.solve(dressing, frame_positions, work, p))
+            pool.install(|| crate::frame::solve(coat, dressing, frame_positions, work, p))
         })?;
         // Later steps no longer continue the playback: keep no checkpoint
         // of them until a seek.
@@ -399,7 +391,8 @@ impl System {
         let result = update(self, progress);
         match result {
             Ok(()) => {
-                self.pose_changes = pose_changes(&self.previous_poses, &self.coat.poses, self.config.pop_threshold);
+                self.pose_changes =
+                    pose_changes(&self.previous_poses, &self.coat.poses, self.dressing.config.pop_threshold);
                 self.export()
             }
             Err(_) => {
@@ -477,7 +470,7 @@ impl System {
     /// is loaded. Refused with `InvalidArgument` when checkpoints are off;
     /// nothing changes on error.
     pub fn seek(&mut self, frame: u64) -> Result<u64> {
-        if self.config.checkpoint_interval == 0 {
+        if self.dressing.config.checkpoint_interval == 0 {
             return Err(Error::new(
                 ErrorKind::InvalidArgument,
                 "config.checkpoint_interval is 0: no checkpoints are kept to seek with",
@@ -504,14 +497,14 @@ impl System {
     /// [`System::seek`]), dropping the oldest past the cap (never the one
     /// after create).
     fn keep_checkpoint(&mut self) {
-        let every = u64::from(self.config.checkpoint_interval);
+        let every = u64::from(self.dressing.config.checkpoint_interval);
         let frame = self.coat.frame_index;
         if every == 0 || !self.on_playback || frame % every != 0 {
             return;
         }
         let blob = self.save_state();
         self.checkpoints.insert(frame, blob);
-        while self.checkpoints.len() > self.config.checkpoint_cap as usize + 1 {
+        while self.checkpoints.len() > self.dressing.config.checkpoint_cap as usize + 1 {
             let oldest = self.checkpoints.keys().copied().find(|&k| k != 0).expect("more than one checkpoint");
             self.checkpoints.remove(&oldest);
         }
@@ -557,7 +550,7 @@ impl System {
             settle_rate,
             checkpoint_interval: _,
             checkpoint_cap: _,
-        } = &self.config;
+        } = &self.dressing.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![
             *seed,

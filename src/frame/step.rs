@@ -1,5 +1,6 @@
 //! One animation frame, incremental (paper §3.3) or legacy (the 2015
-//! method), applied to a coat in place (DESIGN.md §5):
+//! method), applied to a coat in place (DESIGN.md §5): the frame-to-frame
+//! variants of the order and adjust phases of [`crate::frame`]:
 //! 1. re-pose every root from the deformed mesh; feathers keep their pitch
 //!    and roll relative to their own frame (incremental: neighbourhoods and
 //!    obstacle candidates follow the current pose);
@@ -29,7 +30,7 @@
 //! remain are for drift: the seeds are the feathers whose surroundings
 //! moved by more than the drift tolerance times their length (net: the
 //! surroundings recorded when the feather was last adjusted, compared
-//! with where they lie now; see [`super::motion`]), and
+//! with where they lie now; see [`crate::animation::motion`]), and
 //! propagation passes on a feather sinking, shrinking or rolling by more
 //! than the drift tolerance (one that rises into what lies on it fails
 //! their checks). A feather whose obstacles changed with the order is
@@ -41,12 +42,13 @@
 //! +0.21° to +0.27° over rebuild's, with 0 pairs and penetrations. `R_k` (at θs, by the same net motion)
 //! still selects the pairs whose priorities are recomputed.
 
-use super::contact::{Contacts, Footprint, Sphere};
-use super::motion::{RootMap, root_maps};
+use super::phases::{self, Workspace};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
+use crate::animation::contact::{Contacts, Footprint, Sphere};
+use crate::animation::motion::{RootMap, root_maps};
 use crate::body::BodyIndex;
-use crate::coat::{Coat, Dressing, Oriented, Placement, Workspace, orientation};
+use crate::coat::{Coat, Dressing, Oriented, Placement, orientation};
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::geometry::RootFrame;
@@ -109,7 +111,7 @@ pub struct StepWorkspace {
 }
 
 /// Advances `coat` to `positions` (welded) by the incremental or legacy
-/// rule of `dressing.mode`.
+/// rule of `dressing.config.mode`.
 pub fn step_coat(
     coat: &mut Coat,
     dressing: &Dressing,
@@ -120,13 +122,13 @@ pub fn step_coat(
 ) -> Result<()> {
     let start = Instant::now();
     let n = dressing.len();
-    let incremental = dressing.mode == Mode::Incremental;
+    let incremental = dressing.config.mode == Mode::Incremental;
     // 1. Record where the surroundings of the feathers adjusted last lie;
     // re-pose; remember where everything was.
     if coat.staleness.len() != n {
         coat.staleness.reset(n);
     }
-    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
+    let verify = incremental && dressing.config.drift_tolerance > dressing.config.theta_s;
     if verify {
         record_placements(coat, dressing, step);
     }
@@ -134,10 +136,8 @@ pub fn step_coat(
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     let mut neighbourhood_seconds = 0.0;
-    if incremental && dressing.recompute_neighbourhoods {
-        let neighbourhood_start = Instant::now();
-        coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
-        neighbourhood_seconds = neighbourhood_start.elapsed().as_secs_f64();
+    if incremental && dressing.config.recompute_neighbourhoods {
+        neighbourhood_seconds = phases::neighbourhoods(coat, dressing);
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
@@ -149,8 +149,8 @@ pub fn step_coat(
     surroundings_displacement(coat, dressing, step, verify);
     step.seeds.clear();
     step.seeds.resize(n, false);
-    let drift = if verify { dressing.drift_tolerance } else { dressing.theta_s };
-    let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
+    let drift = if verify { dressing.config.drift_tolerance } else { dressing.config.theta_s };
+    let limit = |i: usize| dressing.config.theta_s * dressing.shapes[i].length;
     let drift_limit = |i: usize| drift * dressing.shapes[i].length;
     if verify {
         coat.staleness.set_net(&step.net, drift_limit, &mut step.seeds);
@@ -176,8 +176,8 @@ pub fn step_coat(
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, neighbourhood_seconds, ..FrameReport::default() };
     if incremental {
-        let priorities = Priorities::improved(&coat.frames, dressing.gamma, dressing.lambda);
-        let pairs = dressing.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
+        let priorities = Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda);
+        let pairs = dressing.config.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
         let stats = coat.order.update_frame(pairs, &step.r_k, &priorities);
         report.priority_changes = stats.priority_changes;
         report.reversals = stats.reversals_done;
@@ -192,11 +192,11 @@ pub fn step_coat(
     progress.check(Phase::Adjusting, 0.0)?;
 
     // 4. Readjust R*_k in order, propagating past θs.
-    coat.body.rebuild(&coat.positions, &dressing.triangles);
+    phases::body(coat, dressing);
     if verify {
         watch_other_parts(coat, dressing, &mut step.suspects, &mut step.body_ids);
     }
-    let steps = if dressing.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
+    let steps = if dressing.config.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
     let stats = if n == 0 {
         AdjustStats::default()
     } else {
@@ -205,7 +205,7 @@ pub fn step_coat(
         let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
         let full = CandidateLists::new(offsets, indices);
         work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
-        let settle_rate = if incremental { dressing.settle_rate } else { 0.0 };
+        let settle_rate = if incremental { dressing.config.settle_rate } else { 0.0 };
         work.adjuster.settle_next_run(settle_rate);
         let stats = pass.run(
             Walk::Levels,
@@ -296,8 +296,8 @@ impl Pass<'_> {
     fn selection<'s>(&self, seeds: &'s [bool], suspects: Option<&'s [bool]>) -> Selection<'s> {
         let d = self.dressing;
         match suspects {
-            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
-            None => Selection::Propagate { seeds, threshold: d.theta_s },
+            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.config.drift_tolerance },
+            None => Selection::Propagate { seeds, threshold: d.config.theta_s },
         }
     }
 
