@@ -13,6 +13,7 @@ pub mod animation;
 pub mod body;
 pub mod coat;
 pub mod config;
+pub mod csr;
 pub mod error;
 pub mod feather;
 pub mod ffi;

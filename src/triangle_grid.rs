@@ -12,6 +12,7 @@
 //! a fixed order (cell order, then triangle index) that never depends on
 //! threads.
 
+use crate::csr::Csr;
 use glam::{DVec3, Vec3};
 
 /// At most this many cells along one axis.
@@ -73,9 +74,8 @@ pub struct TriangleGrid {
     cell: f32,
     inv_cell: f32,
     dims: [usize; 3],
-    /// CSR: cell `c` holds `items[cell_start[c]..cell_start[c + 1]]`.
-    cell_start: Vec<u32>,
-    items: Vec<u32>,
+    /// The triangles listed in each cell (by linear cell index).
+    cells: Csr<u32>,
 }
 
 /// One axis of a packed cell: cell coordinates stay below
@@ -212,42 +212,28 @@ impl TriangleGrid {
             let lo = self.cell_of(self.boxes[k].min);
             self.low_cells.push(pack_cell(lo));
         }
-        self.cell_start.clear();
-        self.cell_start.resize(ncell + 1, 0);
+        self.cells.begin(ncell);
         for b in &self.boxes {
             let (lo, hi) = (self.cell_of(b.min), self.cell_of(b.max));
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     for x in lo[0]..=hi[0] {
-                        let c = self.cell_index([x, y, z]);
-                        self.cell_start[c + 1] += 1;
+                        self.cells.count(self.cell_index([x, y, z]));
                     }
                 }
             }
         }
-        for c in 0..ncell {
-            self.cell_start[c + 1] += self.cell_start[c];
-        }
-        self.items.clear();
-        self.items.resize(self.cell_start[ncell] as usize, 0);
-        // Fill using the start table as a running cursor, then shift back.
+        self.cells.allocate();
         for (t, b) in self.boxes.iter().enumerate() {
             let (lo, hi) = (self.cell_of(b.min), self.cell_of(b.max));
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     for x in lo[0]..=hi[0] {
-                        let c = self.cell_index([x, y, z]);
-                        let slot = &mut self.cell_start[c];
-                        self.items[*slot as usize] = t as u32;
-                        *slot += 1;
+                        self.cells.place(self.cell_index([x, y, z]), t as u32);
                     }
                 }
             }
         }
-        for c in (1..=ncell).rev() {
-            self.cell_start[c] = self.cell_start[c - 1];
-        }
-        self.cell_start[0] = 0;
     }
 
     /// The cell holding `p`, clamped to the grid.
@@ -268,7 +254,7 @@ impl TriangleGrid {
     /// The triangles listed in one cell (by linear cell index).
     #[inline]
     pub fn cell_items(&self, cell: usize) -> &[u32] {
-        &self.items[self.cell_start[cell] as usize..self.cell_start[cell + 1] as usize]
+        self.cells.row(cell)
     }
 
     /// Number of cells.

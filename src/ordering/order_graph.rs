@@ -16,6 +16,7 @@
 //! (In the paper's notation that is the DAG edge dependent → prior, A→B when
 //! `ΔP_AB > 0`.)
 
+use crate::csr::Csr;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::ops::AddAssign;
@@ -137,8 +138,8 @@ pub struct PriorityOrder {
     pub(super) pairs: Vec<(u32, u32)>,
     pub(super) delta: Vec<f32>,
     pub(super) state: Vec<Edge>,
-    pub(super) inc_offsets: Vec<u32>,
-    pub(super) inc: Vec<Incidence>,
+    /// Per root, its pairs (partner and pair index), sorted by partner.
+    pub(super) inc: Csr<Incidence>,
     pub(super) edge_count: usize,
     // The order: `order[rank[v]] == v`.
     pub(super) rank: Vec<u32>,
@@ -176,7 +177,6 @@ pub struct PriorityOrder {
     pub(super) next_blocking: Vec<(u32, u32)>,
     pub(super) pair_map: Vec<u32>,
     pub(super) fresh: Vec<u32>,
-    pub(super) cursor: Vec<u32>,
     pub(super) sort_keys: Vec<u64>,
     pub(super) waiting: Vec<u32>,
     pub(super) heap: BinaryHeap<Reverse<(u32, u32)>>,
@@ -308,11 +308,7 @@ impl PriorityOrder {
     }
 
     pub(super) fn incidence(&self, node: u32) -> &[Incidence] {
-        let v = node as usize;
-        if v + 1 >= self.inc_offsets.len() {
-            return &[];
-        }
-        &self.inc[self.inc_offsets[v] as usize..self.inc_offsets[v + 1] as usize]
+        self.inc.row(node as usize)
     }
 
     /// Index of the pair `{a, b}` (either orientation).
@@ -353,32 +349,17 @@ impl PriorityOrder {
         *slot = edge;
     }
 
-    /// Rebuilds the incidence lists from the pair set (counting sort; each
-    /// root's list comes out sorted by partner because pairs are sorted).
+    /// Rebuilds the incidence lists from the pair set (each root's list
+    /// comes out sorted by partner because pairs are sorted).
     pub(super) fn rebuild_incidence(&mut self) {
         let n = self.node_count();
-        self.inc_offsets.clear();
-        self.inc_offsets.resize(n + 1, 0);
-        for &(a, b) in &self.pairs {
-            self.inc_offsets[a as usize + 1] += 1;
-            self.inc_offsets[b as usize + 1] += 1;
-        }
-        for v in 0..n {
-            self.inc_offsets[v + 1] += self.inc_offsets[v];
-        }
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.inc_offsets[..n]);
-        self.inc.clear();
-        self.inc.resize(self.pairs.len() * 2, Incidence::default());
-        for (pid, &(a, b)) in self.pairs.iter().enumerate() {
-            let pair = pid as u32;
-            let ca = &mut self.cursor[a as usize];
-            self.inc[*ca as usize] = Incidence { other: b, pair };
-            *ca += 1;
-            let cb = &mut self.cursor[b as usize];
-            self.inc[*cb as usize] = Incidence { other: a, pair };
-            *cb += 1;
-        }
+        let pairs = &self.pairs;
+        self.inc.rebuild(n, || {
+            pairs.iter().enumerate().flat_map(|(pid, &(a, b))| {
+                let pair = pid as u32;
+                [(a as usize, Incidence { other: b, pair }), (b as usize, Incidence { other: a, pair })]
+            })
+        });
     }
 
     /// Resizes the per-root arrays for `n` roots and forgets all pairs.

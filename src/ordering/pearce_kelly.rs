@@ -52,9 +52,8 @@ impl PriorityOrder {
         while head < self.forward.len() {
             let v = self.forward[head];
             head += 1;
-            let (from, to) = (self.inc_offsets[v as usize] as usize, self.inc_offsets[v as usize + 1] as usize);
-            for k in from..to {
-                let Incidence { other: w, pair } = self.inc[k];
+            for k in self.inc.span(v as usize) {
+                let Incidence { other: w, pair } = self.inc.items()[k];
                 if !is_prior_side(v, w, self.state[pair as usize])
                     || stronger_than.is_some_and(|than| !self.stronger(pair, than))
                 {
@@ -84,9 +83,8 @@ impl PriorityOrder {
         self.backward.push(start);
         self.stack.push(start);
         while let Some(v) = self.stack.pop() {
-            let (from, to) = (self.inc_offsets[v as usize] as usize, self.inc_offsets[v as usize + 1] as usize);
-            for k in from..to {
-                let Incidence { other: w, pair } = self.inc[k];
+            for k in self.inc.span(v as usize) {
+                let Incidence { other: w, pair } = self.inc.items()[k];
                 if is_prior_side(w, v, self.state[pair as usize])
                     && self.mark[w as usize] != s
                     && self.rank[w as usize] > lower
