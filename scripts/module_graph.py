@@ -123,8 +123,7 @@ class Crate:
         self.src = os.path.join(root, "src")
         self.with_tests = with_tests
         lib = self.read(os.path.join(self.src, "lib.rs"))
-        self.top = re.findall(r"(?m)^\s*pub\s+mod\s+(" + IDENT + r")\s*;", lib)
-        self.top += [m for m in re.findall(r"(?m)^\s*mod\s+(" + IDENT + r")\s*;", lib) if m not in self.top]
+        self.top = [m[1] for m in re.findall(r"(?m)^\s*(pub(?:\([^)]*\))?\s+)?mod\s+(" + IDENT + r")\s*;", lib)]
         self.lib_exports = self.reexports(lib)
         self.files = {}  # (module, file stem) -> stripped text
         self.children = {}  # module -> {stem}

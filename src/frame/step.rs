@@ -212,8 +212,7 @@ pub fn step_coat(
             &mut work.adjuster,
             &mut coat.poses,
             CandidateLists::new(rows.0, rows.1),
-            &step.seeds,
-            verify.then_some(&step.suspects[..]),
+            pass.selection(&step.seeds, verify.then_some(&step.suspects[..])),
             &|done| progress.check(Phase::Adjusting, done).is_ok(),
         );
         // A stopped adjustment (None) has set the progress's stop flag.
@@ -246,8 +245,7 @@ pub fn step_coat(
                 &mut work.adjuster,
                 &mut coat.poses,
                 CandidateLists::new(offsets, indices),
-                seeds,
-                verify.then_some(&step.no_suspects[..]),
+                pass.selection(seeds, verify.then_some(&step.no_suspects[..])),
                 &|_| progress.check(Phase::Adjusting, 1.0).is_ok(),
             );
             progress.check(Phase::Adjusting, 1.0)?;
@@ -301,22 +299,19 @@ impl Pass<'_> {
         }
     }
 
-    /// Adjusts `seeds` in order, and past θs what lies on them, with
-    /// `candidates` as obstacle lists, by levels or one feather after the
-    /// other (see [`Walk`]); the same poses either way.
-    #[allow(clippy::too_many_arguments)]
+    /// Adjusts the seeds of `selection` in order, and past θs what lies on
+    /// them, with `candidates` as obstacle lists, by levels or one feather
+    /// after the other (see [`Walk`]); the same poses either way.
     fn run(
         &self,
         walk: Walk,
         adjuster: &mut Adjuster,
         poses: &mut [FeatherPose],
         candidates: CandidateLists<'_>,
-        seeds: &[bool],
-        suspects: Option<&[bool]>,
+        selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
-        let selection = self.selection(seeds, suspects);
         let run = match walk {
             Walk::Levels => Adjuster::adjust_in_order_until,
             Walk::Sparse => Adjuster::adjust_sparse_until,
