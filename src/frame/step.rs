@@ -45,7 +45,7 @@
 use super::phases::{self, Workspace};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
-use crate::animation::contact::{Contacts, Footprint, Sphere};
+use crate::animation::contact::{Candidates, Contacts, Footprint, Posed, Sphere};
 use crate::animation::motion::{RootMap, root_maps};
 use crate::body::BodyIndex;
 use crate::coat::{Coat, Dressing, Oriented, Placement, orientation};
@@ -141,7 +141,8 @@ pub fn step_coat(
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
-    step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices, rank);
+    let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
+    step.contacts.update(posed, &dressing.adjust_params, Candidates { offsets, indices, rank });
     progress.check(Phase::Ordering, 0.3)?;
 
     // 2. R_k from the relative motion of the roots since the last frame.
@@ -202,7 +203,7 @@ pub fn step_coat(
     } else {
         let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
         let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
-        let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
+        let rows = step.contacts.obstacle_rows(Candidates { offsets, indices, rank: coat.order.ranks() });
         let full = CandidateLists::new(offsets, indices);
         work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
         let settle_rate = if incremental { dressing.config.settle_rate } else { 0.0 };
@@ -220,15 +221,9 @@ pub fn step_coat(
         let mut stats = stats.unwrap_or_default();
         coat.settling.clear();
         coat.settling.extend_from_slice(work.adjuster.settling());
-        let missed = step.contacts.missed(
-            &coat.frames,
-            &dressing.shapes,
-            &coat.poses,
-            offsets,
-            indices,
-            coat.order.ranks(),
-            work.adjuster.adjusted(),
-        );
+        let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
+        let candidates = Candidates { offsets, indices, rank: coat.order.ranks() };
+        let missed = step.contacts.missed(posed, candidates, work.adjuster.adjusted());
         if missed > 0 {
             // Feathers an earlier one now lies on unlisted: readjust them
             // (and, past θs, what lies on them) with their full lists.
