@@ -3,11 +3,10 @@
 
 use super::System;
 use crate::error::Result;
-use crate::feather::{FeatherTriangles, MAX_TRIANGLES, pose_change, triangles_per_feather};
+use crate::feather::{FeatherTriangles, feather_triangles, pose_change};
 use crate::progress::Progress;
 use crate::stats::{PartReport, ValidationReport};
 use crate::validation::{ProbeSkin, Validation, ValidationInput, validate_part, validate_with_progress};
-use glam::Vec3;
 
 /// Probes per feather for the coverage figure of [`System::validate`].
 const COVERAGE_PROBES_PER_FEATHER: usize = 4;
@@ -100,21 +99,12 @@ impl System {
         r
     }
 
-    /// Each feather's triangles at the current pose, as the validation takes them.
+    /// Each feather's triangles at the current pose, as the validation takes
+    /// them: posed again from the coat (the same floats the export gave the
+    /// host), not read back from the host's float layout.
     fn feather_triangle_sets(&self) -> Vec<FeatherTriangles> {
-        let mut corners = self.triangles.iter().map(|&p| Vec3::from_array(p));
-        self.dressing
-            .shapes
-            .iter()
-            .map(|shape| {
-                let mut t = [[Vec3::ZERO; 3]; MAX_TRIANGLES];
-                let n = triangles_per_feather(shape);
-                for triangle in &mut t[..n] {
-                    *triangle = std::array::from_fn(|_| corners.next().unwrap_or(Vec3::NAN));
-                }
-                FeatherTriangles::from_slice(&t[..n])
-            })
-            .collect()
+        let (coat, shapes) = (&self.coat, &self.dressing.shapes);
+        coat.frames.iter().zip(shapes).zip(&coat.poses).map(|((f, s), p)| feather_triangles(f, s, *p)).collect()
     }
 }
 
