@@ -4,9 +4,10 @@
 //! 2017). The safe Rust API is [`System`]; C and C++ hosts use the C ABI in
 //! [`ffi`] through `include/plumage.h`.
 //!
-//! Where things live: `mesh` (input checks, welding), `geometry` (shared
-//! value types), `config`, `error`, `system` (the pipeline), `ffi` (every
-//! `extern "C"` function, nothing else).
+//! Where things live, and which module may import which: `ARCHITECTURE.md`
+//! at the repository root (`mesh`, `surface`, `field`, `sampling` prepare a
+//! coat; `frame` runs the phases of a frame on the `coat`; `system` is the
+//! safe API; `ffi` every `extern "C"` function, nothing else).
 
 pub mod adjustment;
 pub mod animation;
