@@ -16,9 +16,10 @@ use plumage::adjustment::{
     AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection, adjust_feather,
 };
 use plumage::body::BodyIndex;
-use plumage::coat::{Coat, Dressing, Workspace};
+use plumage::coat::{Coat, Dressing};
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::field::Fields;
+use plumage::frame::{Workspace, solve};
 use plumage::geometry::RootFrame;
 use plumage::mesh::{MeshInput, weld};
 use plumage::progress::Progress;
@@ -80,7 +81,7 @@ impl Scene {
         let sampling = sample_roots_with_progress(&mesh, &surface, &fields, &config, &Progress::none()).ok()?;
         let dressing = Dressing::new(surface, &mesh, sampling.roots, &config);
         let mut coat = Coat::default();
-        coat.solve(&dressing, &mesh.positions, &mut Workspace::default(), &Progress::none()).ok()?;
+        solve(&mut coat, &dressing, &mesh.positions, &mut Workspace::default(), &Progress::none()).ok()?;
         let (offsets, candidates) = coat.neighbourhoods.obstacle_csr();
         Some(Scene {
             offsets: offsets.to_vec(),

@@ -17,6 +17,7 @@ use crate::config::Config;
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::SurfacePoint;
 use crate::mesh::WeldedMesh;
+use crate::spacing::nominal_spacing;
 use crate::surface::Surface;
 use glam::Vec3;
 
@@ -45,6 +46,8 @@ impl Fields {
     /// [`WeldedMesh::weld_attribute`]): `orientations` holds xyz tangent
     /// hints, the others one multiplier each (finite, ≥ 0). Missing
     /// multipliers are 1; missing hints are derived from `config.flow_axis`.
+    /// `config` is checked by [`Config::validate`], the one rule for its
+    /// fields (the flow axis among them).
     pub fn new(
         mesh: &WeldedMesh,
         surface: &Surface,
@@ -54,6 +57,7 @@ impl Fields {
         width_scale: Option<&[f32]>,
         config: &Config,
     ) -> Result<Self> {
+        config.validate()?;
         let n = mesh.positions.len();
         if surface.vertex_count() != n {
             return Err(Error::new(
@@ -71,10 +75,9 @@ impl Fields {
                 dirs.into_iter().map(Option::unwrap).collect()
             }
             None => {
+                // A checked config's axis is finite and not tiny, or zero:
+                // derived, always a unit vector.
                 let axis = if config.flow_axis == Vec3::ZERO { principal_flow_axis(mesh) } else { config.flow_axis };
-                if !axis.is_finite() || axis.length_squared() == 0.0 {
-                    return Err(Error::new(ErrorKind::InvalidArgument, "config.flow_axis must be finite and non-zero"));
-                }
                 let flow = match config.flow_source {
                     Some(source) => flow_from_source(mesh, surface, source, axis),
                     None => vec![axis; n],
@@ -228,13 +231,7 @@ fn check_values(name: &str, values: &[f32], expected: usize, non_negative: bool)
 /// shape's length for the configured spacing, or for the spacing that
 /// spreads the wanted feather count over the whole surface.
 fn nominal_feather_length(surface: &Surface, config: &Config) -> f32 {
-    let spacing = if config.spacing > 0.0 {
-        config.spacing
-    } else {
-        let target = crate::sampling::target_feathers(config) as f64;
-        (surface.rest_area() / (crate::sampling::GUIDED_PACKING * target)).sqrt() as f32
-    };
-    config.length_per_spacing * spacing
+    config.length_per_spacing * nominal_spacing(surface.rest_area(), config)
 }
 
 /// Per vertex, the spacing multiplier the bending of the surface calls for:
@@ -462,6 +459,18 @@ mod tests {
         let f = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap();
         for d in f.vertex_directions() {
             assert!((d.length() - 1.0).abs() < 1e-5 && d.z.abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn a_config_the_rule_refuses_is_refused() {
+        let mesh = plate();
+        let s = Surface::new(&mesh);
+        for flow_axis in [Vec3::new(f32::NAN, 0.0, 0.0), Vec3::new(1e-9, 0.0, 0.0)] {
+            let cfg = Config { flow_axis, ..Config::default() };
+            let e = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InvalidArgument);
+            assert!(e.message().contains("flow_axis"), "{}", e.message());
         }
     }
 

@@ -5,7 +5,7 @@
 //! feather's local coordinates x runs along the shaft, y across the vanes and
 //! z away from the skin.
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
 /// A point on the welded surface: a face and the barycentric weights of its
 /// three corners (they sum to 1). Surface points follow any deformation of
@@ -66,6 +66,12 @@ impl RootFrame {
     pub fn to_local(&self, world: Vec3) -> Vec3 {
         let d = world - self.position;
         Vec3::new(d.dot(self.tangent), d.dot(self.binormal), d.dot(self.normal))
+    }
+
+    /// The axes `(õ, b, n)` as matrix columns (local to world rotation).
+    #[inline]
+    pub fn axes(&self) -> Mat3 {
+        Mat3::from_cols(self.tangent, self.binormal, self.normal)
     }
 }
 

@@ -10,8 +10,9 @@
 //! is the same for every ray of a closed mesh, and a vote of three rays
 //! settles a ray grazing an edge or a mesh with holes.
 
-use crate::body::{Aabb, BodyIndex, ray_triangle};
-use crate::validation::triangles_intersect;
+use crate::body::BodyIndex;
+use crate::intersect::triangles_intersect;
+use crate::triangle_grid::{Aabb, ray_triangle};
 use glam::Vec3;
 use rayon::prelude::*;
 

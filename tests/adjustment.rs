@@ -12,7 +12,7 @@ use plumage::body::BodyIndex;
 use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
-use plumage::validation::{ProbeSkin, Validation, coverage, intersecting_pairs, validate};
+use plumage::validation::{ProbeSkin, Validation, ValidationInput, coverage, intersecting_pairs, validate};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -209,16 +209,16 @@ impl Scene {
     }
 
     fn validate(&self, poses: &[FeatherPose], probes: usize) -> Validation {
-        validate(
-            &self.triangles_at(poses),
-            &self.frames,
-            &self.shapes,
+        validate(&ValidationInput {
+            feather_triangles: &self.triangles_at(poses),
+            frames: &self.frames,
+            shapes: &self.shapes,
             poses,
-            &self.body,
-            &ProbeSkin::whole(&self.positions, &self.triangles),
+            body: &self.body,
+            skin: &ProbeSkin::whole(&self.positions, &self.triangles),
             probes,
-            7,
-        )
+            seed: 7,
+        })
     }
 }
 

@@ -8,7 +8,7 @@ use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_tria
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{
-    ProbeSkin, body_penetrations, coverage, intersecting_pairs, mean_pitch_deg, triangles_intersect,
+    ProbeSkin, ValidationInput, body_penetrations, coverage, intersecting_pairs, mean_pitch_deg, triangles_intersect,
     triangles_intersect_f64, validate,
 };
 use proptest::prelude::*;
@@ -300,7 +300,18 @@ fn validation_is_the_same_at_1_2_and_4_threads() {
     let (pos, mesh, body) = plane_body(6.0);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| validate(&tris, &frames, &shapes, &poses, &body, &ProbeSkin::whole(&pos, &mesh), 2000, 4))
+        let skin = ProbeSkin::whole(&pos, &mesh);
+        let input = ValidationInput {
+            feather_triangles: &tris,
+            frames: &frames,
+            shapes: &shapes,
+            poses: &poses,
+            body: &body,
+            skin: &skin,
+            probes: 2000,
+            seed: 4,
+        };
+        pool.install(|| validate(&input))
     };
     let one = run(1);
     assert!(!one.intersecting_pairs.is_empty() && !one.body_penetrations.is_empty());

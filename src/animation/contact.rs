@@ -107,6 +107,29 @@ impl Shadow {
     }
 }
 
+/// Every feather at one pose: its root frame, shape and pose.
+#[derive(Clone, Copy, Debug)]
+pub struct Posed<'a> {
+    /// Each feather's root frame.
+    pub frames: &'a [RootFrame],
+    /// Each feather's dimensions.
+    pub shapes: &'a [FeatherShape],
+    /// Each feather's pose.
+    pub poses: &'a [FeatherPose],
+}
+
+/// The obstacle candidates (CSR rows: feather i's candidates are
+/// `indices[offsets[i]..offsets[i + 1]]`) and the order's rank of each feather.
+#[derive(Clone, Copy, Debug)]
+pub struct Candidates<'a> {
+    /// Row offsets, one more than there are feathers.
+    pub offsets: &'a [u32],
+    /// The candidates, row after row.
+    pub indices: &'a [u32],
+    /// Each feather's rank in the order.
+    pub rank: &'a [u32],
+}
+
 /// A feather's sphere centre and squared radii without and with the pose
 /// margin, packed for the candidate loop.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -171,17 +194,9 @@ impl Contacts {
     /// margin. Only an earlier candidate can be an obstacle, so the other
     /// half of the entries waits until an order makes them earlier
     /// ([`obstacle_rows`](Self::obstacle_rows)).
-    #[allow(clippy::too_many_arguments)]
-    pub fn update(
-        &mut self,
-        frames: &[RootFrame],
-        shapes: &[FeatherShape],
-        poses: &[FeatherPose],
-        params: &AdjustParams,
-        offsets: &[u32],
-        indices: &[u32],
-        rank: &[u32],
-    ) {
+    pub fn update(&mut self, feathers: Posed<'_>, params: &AdjustParams, candidates: Candidates<'_>) {
+        let Posed { frames, shapes, poses } = feathers;
+        let Candidates { offsets, indices, rank } = candidates;
         let n = frames.len();
         if self.footprints.len() != n {
             self.footprints.clear();
@@ -239,7 +254,8 @@ impl Contacts {
     /// Fills the rows handed to the adjustment: the candidates of each
     /// feather that come earlier in the order (`rank`) and touch its
     /// footprint or come within the pose margin of it.
-    pub fn obstacle_rows(&mut self, offsets: &[u32], indices: &[u32], rank: &[u32]) -> (&[u32], &[u32]) {
+    pub fn obstacle_rows(&mut self, candidates: Candidates<'_>) -> (&[u32], &[u32]) {
+        let Candidates { offsets, indices, rank } = candidates;
         self.offsets.clear();
         self.offsets.push(0);
         // Written without branching on the (unpredictable) tests; sized for
@@ -271,17 +287,9 @@ impl Contacts {
     /// feather that left its sphere grown by the pose margin can do that
     /// (it turned by more than the margin). Returns how many were marked;
     /// [`missed_flags`](Self::missed_flags) holds them.
-    #[allow(clippy::too_many_arguments)]
-    pub fn missed(
-        &mut self,
-        frames: &[RootFrame],
-        shapes: &[FeatherShape],
-        poses: &[FeatherPose],
-        offsets: &[u32],
-        indices: &[u32],
-        rank: &[u32],
-        adjusted: &[bool],
-    ) -> usize {
+    pub fn missed(&mut self, feathers: Posed<'_>, candidates: Candidates<'_>, adjusted: &[bool]) -> usize {
+        let Posed { frames, shapes, poses } = feathers;
+        let Candidates { offsets, indices, rank } = candidates;
         let n = frames.len();
         self.missed.clear();
         self.missed.resize(n, false);
@@ -391,8 +399,9 @@ mod tests {
         let swapped: Vec<u32> = by_x.iter().map(|&r| r ^ 1).collect();
         let rows = |first: &[u32], last: &[u32]| {
             let mut c = Contacts::default();
-            c.update(&frames, &shapes, &poses, &params, offsets, indices, first);
-            let (o, i) = c.obstacle_rows(offsets, indices, last);
+            let posed = Posed { frames: &frames, shapes: &shapes, poses: &poses };
+            c.update(posed, &params, Candidates { offsets, indices, rank: first });
+            let (o, i) = c.obstacle_rows(Candidates { offsets, indices, rank: last });
             (o.to_vec(), i.to_vec())
         };
         let late = rows(&by_x, &swapped);

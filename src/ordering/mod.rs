@@ -33,11 +33,14 @@
 mod dynamic_order;
 mod kd_tree;
 mod neighbours;
+mod order_graph;
 mod order_state;
+mod pearce_kelly;
 mod priority;
 mod static_order;
+mod suppressed;
 
-pub use dynamic_order::{PriorityOrder, ReorderStats};
 pub use neighbours::{NeighbourParams, Neighbourhoods};
+pub use order_graph::{PriorityOrder, ReorderStats};
 pub use priority::{Priorities, PriorityRule, directed_priority_eq2, directed_priority_eq3};
 pub use static_order::StaticReport;

@@ -28,7 +28,7 @@
 //! 1 `lo` prior, 2 `hi` prior); suppressed pair indices (u32 slice); then
 //! each suppressed pair's blocking path (u32 slice of nodes).
 
-use super::dynamic_order::{Edge, PriorityOrder};
+use super::order_graph::{Edge, PriorityOrder};
 use crate::error::{Error, ErrorKind, Result};
 use crate::snapshot::{Reader, Writer};
 

@@ -17,7 +17,6 @@
 //! so `ΔP_AB == −ΔP_BA` holds bitwise (Rust never contracts `a*b + c` into a
 //! fused multiply-add, so each `P` is one fixed sequence of roundings).
 
-use super::dynamic_order::PriorityOrder;
 use crate::geometry::RootFrame;
 use glam::Vec3;
 
@@ -97,25 +96,6 @@ impl<'a> Priorities<'a> {
     pub fn deltas_of_pairs(&self, pairs: &[(u32, u32)], out: &mut Vec<f32>) {
         out.clear();
         out.extend(pairs.iter().map(|&(a, b)| self.delta(a, b)));
-    }
-
-    /// The recomputed `ΔP` of every pair of `order` that touches one of
-    /// `roots` (paper §3.3: for `i ∈ R_k`, all `j` paired with `i`), as
-    /// `(lo, hi, ΔP_lo,hi)` sorted and without duplicates, ready for
-    /// [`PriorityOrder::update_pairs`]. `out` is cleared first.
-    pub fn changed_pairs_of_roots(&self, order: &PriorityOrder, roots: &[u32], out: &mut Vec<(u32, u32, f32)>) {
-        out.clear();
-        for &i in roots {
-            for j in order.partners_of(i) {
-                let (lo, hi) = (i.min(j), i.max(j));
-                out.push((lo, hi, 0.0));
-            }
-        }
-        out.sort_unstable_by_key(|&(lo, hi, _)| (lo, hi));
-        out.dedup_by_key(|&mut (lo, hi, _)| (lo, hi));
-        for entry in out.iter_mut() {
-            entry.2 = self.delta(entry.0, entry.1);
-        }
     }
 }
 

@@ -14,7 +14,7 @@
 //! remaining root still waits on a prior (a cycle), places the root waiting
 //! on the fewest. Only edges in or near cycles then need a search.
 
-use super::dynamic_order::{Edge, PriorityOrder, check_pairs, sanitized_delta};
+use super::order_graph::{Edge, PriorityOrder, check_pairs, sanitized_delta};
 use std::cmp::Reverse;
 use std::time::Instant;
 
@@ -112,8 +112,8 @@ impl PriorityOrder {
             self.mark[v as usize] = placed;
             self.rank[v as usize] = self.order.len() as u32;
             self.order.push(v);
-            for k in self.inc_offsets[v as usize] as usize..self.inc_offsets[v as usize + 1] as usize {
-                let e = self.inc[k];
+            for k in self.inc.span(v as usize) {
+                let e = self.inc.items()[k];
                 let (lo, hi) = self.pairs[e.pair as usize];
                 let v_is_prior = match Edge::wanted(self.delta[e.pair as usize]) {
                     Edge::LoPrior => v == lo,

@@ -15,6 +15,7 @@ pub mod walk;
 pub use geodesic::NearbyPatch;
 pub use walk::{WalkEnd, WalkResult};
 
+use crate::csr::Csr;
 use crate::geometry::{SurfacePoint, triangle_area_vector};
 use crate::mesh::WeldedMesh;
 use glam::Vec3;
@@ -67,9 +68,8 @@ pub struct Surface {
     /// CSR: the faces of each edge (`edge_face_start[e]..edge_face_start[e + 1]`).
     edge_face_start: Vec<u32>,
     edge_faces: Vec<u32>,
-    /// CSR: the vertices adjacent to each vertex, sorted.
-    vertex_neighbour_start: Vec<u32>,
-    vertex_neighbours: Vec<u32>,
+    /// The vertices adjacent to each vertex, sorted.
+    vertex_neighbours: Csr<u32>,
     boundary_edges: usize,
     non_manifold_edges: usize,
     rest_vertex_normals: Vec<Vec3>,
@@ -100,7 +100,7 @@ impl Surface {
                 _ => non_manifold_edges += 1,
             }
         }
-        let (vertex_neighbour_start, vertex_neighbours) = build_vertex_neighbours(vertex_count, &edges);
+        let vertex_neighbours = build_vertex_neighbours(vertex_count, &edges);
         let mut rest_vertex_normals = Vec::new();
         vertex_normals_into(&mesh.positions, &triangles, &mut rest_vertex_normals);
         let rest_face_areas = (0..triangles.len()).map(|f| 0.5 * triangle_area_vector_of(mesh, f).length()).collect();
@@ -113,7 +113,6 @@ impl Surface {
             edges,
             edge_face_start,
             edge_faces,
-            vertex_neighbour_start,
             vertex_neighbours,
             boundary_edges,
             non_manifold_edges,
@@ -224,7 +223,7 @@ impl Surface {
 
     /// The vertices joined to `v` by an edge, in increasing order.
     pub fn vertex_neighbours(&self, v: usize) -> &[u32] {
-        &self.vertex_neighbours[self.vertex_neighbour_start[v] as usize..self.vertex_neighbour_start[v + 1] as usize]
+        self.vertex_neighbours.row(v)
     }
 
     /// Area-weighted vertex normals at the rest pose.
@@ -337,28 +336,14 @@ fn build_edges(triangles: &[[u32; 3]]) -> EdgeTables {
     (edges, face_edges, edge_face_start, edge_faces)
 }
 
-fn build_vertex_neighbours(vertex_count: usize, edges: &[[u32; 2]]) -> (Vec<u32>, Vec<u32>) {
-    let mut degree = vec![0u32; vertex_count + 1];
-    for &[a, b] in edges {
-        degree[a as usize] += 1;
-        degree[b as usize] += 1;
-    }
-    let mut start = vec![0u32; vertex_count + 1];
+/// Each vertex's neighbours along the edges, sorted.
+fn build_vertex_neighbours(vertex_count: usize, edges: &[[u32; 2]]) -> Csr<u32> {
+    let mut neighbours = Csr::new();
+    neighbours.rebuild(vertex_count, || edges.iter().flat_map(|&[a, b]| [(a as usize, b), (b as usize, a)]));
     for v in 0..vertex_count {
-        start[v + 1] = start[v] + degree[v];
+        neighbours.row_mut(v).sort_unstable();
     }
-    let mut fill = start.clone();
-    let mut neighbours = vec![0u32; start[vertex_count] as usize];
-    for &[a, b] in edges {
-        neighbours[fill[a as usize] as usize] = b;
-        fill[a as usize] += 1;
-        neighbours[fill[b as usize] as usize] = a;
-        fill[b as usize] += 1;
-    }
-    for v in 0..vertex_count {
-        neighbours[start[v] as usize..start[v + 1] as usize].sort_unstable();
-    }
-    (start, neighbours)
+    neighbours
 }
 
 #[cfg(test)]

@@ -10,9 +10,10 @@
 //!   (see [`crate::interior`]). A feather covering such a probe would have
 //!   to lie inside the body.
 
-use crate::body::{BodyIndex, TriangleGrid, ray_triangle};
+use crate::body::BodyIndex;
 use crate::interior::BodyInterior;
 use crate::rng::Rng;
+use crate::triangle_grid::{TriangleGrid, ray_triangle};
 use glam::Vec3;
 use rayon::prelude::*;
 

@@ -4,26 +4,26 @@
 //! are integers and sums run in index order.
 
 mod coverage;
+mod exact;
 mod lie;
-mod tri_tri;
 
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
+pub(crate) use exact::{BoxedTriangles, FeatherBoxes};
+pub use exact::{body_penetrations, feather_beyond_root};
+// Only the adjustment's tests use the plane directly.
+#[cfg(test)]
+pub(crate) use exact::FlatPlane;
 pub use lie::{BRISTLE_TIP_HEIGHT, TipHeights, summarise_tip_heights, tip_heights};
 
-use tri_tri::{Prepared, prepared_intersect};
-pub use tri_tri::{triangles_intersect, triangles_intersect_f64};
+pub use crate::intersect::{triangles_intersect, triangles_intersect_f64};
 
-use crate::body::{Aabb, BodyIndex, TriangleGrid};
+use crate::body::BodyIndex;
 use crate::error::Result;
-use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_normal, shaft_direction};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles};
 use crate::geometry::RootFrame;
 use crate::progress::{Phase, Progress};
-use glam::Vec3;
+use crate::triangle_grid::TriangleGrid;
 use rayon::prelude::*;
-
-/// Feathers may cross the body this close to their root (fraction of the
-/// length, along the shaft): that is where they enter the skin.
-pub(crate) const ROOT_ALLOWANCE: f32 = 0.05;
 
 /// The figures of one validation.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -47,41 +47,39 @@ pub struct Validation {
     pub tip_heights: TipHeights,
 }
 
-/// Runs every check. `feather_triangles[i]` are feather i's triangles at
-/// `poses[i]` (as [`crate::feather::feather_triangles`] gives them); the
-/// coverage probes are drawn on `skin`, usually the body at the same pose;
-/// `probes` probe points are drawn with `seed`.
-#[allow(clippy::too_many_arguments)]
-pub fn validate(
-    feather_triangles: &[FeatherTriangles],
-    frames: &[RootFrame],
-    shapes: &[FeatherShape],
-    poses: &[FeatherPose],
-    body: &BodyIndex,
-    skin: &ProbeSkin<'_>,
-    probes: usize,
-    seed: u64,
-) -> Validation {
-    let none = Progress::none();
-    validate_with_progress(feather_triangles, frames, shapes, poses, body, skin, probes, seed, &none)
-        .expect("validation without a progress sink is never interrupted")
+/// What a validation looks at: every feather at one pose, the body at that
+/// pose and the skin the coverage probes are drawn on.
+#[derive(Clone, Copy)]
+pub struct ValidationInput<'a> {
+    /// `feather_triangles[i]` are feather i's triangles at `poses[i]` (as
+    /// [`crate::feather::feather_triangles`] gives them).
+    pub feather_triangles: &'a [FeatherTriangles],
+    /// Each feather's root frame.
+    pub frames: &'a [RootFrame],
+    /// Each feather's dimensions.
+    pub shapes: &'a [FeatherShape],
+    /// Each feather's pose.
+    pub poses: &'a [FeatherPose],
+    /// The body at the same pose.
+    pub body: &'a BodyIndex,
+    /// Where the coverage probes are drawn, usually the body's skin.
+    pub skin: &'a ProbeSkin<'a>,
+    /// How many probe points are drawn.
+    pub probes: usize,
+    /// The seed of the probe points.
+    pub seed: u64,
+}
+
+/// Runs every check on `input`.
+pub fn validate(input: &ValidationInput<'_>) -> Validation {
+    validate_with_progress(input, &Progress::none()).expect("validation without a progress sink is never interrupted")
 }
 
 /// As [`validate`], reporting `Phase::Validating` to `progress` between its
 /// stages (the grid, coverage, pairs, penetrations, tip heights); stopped,
 /// it returns `Interrupted` (validation changes nothing).
-#[allow(clippy::too_many_arguments)]
-pub fn validate_with_progress(
-    feather_triangles: &[FeatherTriangles],
-    frames: &[RootFrame],
-    shapes: &[FeatherShape],
-    poses: &[FeatherPose],
-    body: &BodyIndex,
-    skin: &ProbeSkin<'_>,
-    probes: usize,
-    seed: u64,
-    progress: &Progress,
-) -> Result<Validation> {
+pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) -> Result<Validation> {
+    let ValidationInput { feather_triangles, frames, shapes, poses, body, skin, probes, seed } = *input;
     progress.check(Phase::Validating, 0.0)?;
     let (grid, owner) = feather_grid(feather_triangles);
     progress.check(Phase::Validating, 0.1)?;
@@ -109,20 +107,10 @@ pub fn validate_with_progress(
 /// marks (one flag per feather). Every feather is still an obstacle and a
 /// cover: the pairs are those with at least one member, the penetrations,
 /// pitch and tip heights the members', and the coverage probes are drawn on
-/// `skin`, which the caller restricts to the part's skin. Indices stay the
-/// whole coat's.
-#[allow(clippy::too_many_arguments)]
-pub fn validate_part(
-    feather_triangles: &[FeatherTriangles],
-    frames: &[RootFrame],
-    shapes: &[FeatherShape],
-    poses: &[FeatherPose],
-    body: &BodyIndex,
-    skin: &ProbeSkin<'_>,
-    probes: usize,
-    seed: u64,
-    member: &[bool],
-) -> Validation {
+/// `input.skin`, which the caller restricts to the part's skin. Indices
+/// stay the whole coat's.
+pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation {
+    let ValidationInput { feather_triangles, frames, shapes, poses, body, skin, probes, seed } = *input;
     let (grid, owner) = feather_grid(feather_triangles);
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
     let coverage = count_covered(&grid, longest, skin, body, probes, seed);
@@ -208,449 +196,10 @@ fn intersecting_pairs_in(grid: &TriangleGrid, owner: &[u32]) -> Vec<(u32, u32)> 
     pairs
 }
 
-/// The part of a feather more than `ROOT_ALLOWANCE` of its length from
-/// the root along the posed shaft, as up to four triangles (each vane
-/// clipped to a quadrilateral).
-pub fn feather_beyond_root(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Vec<[Vec3; 3]> {
-    let mut out = Vec::with_capacity(4);
-    feather_beyond_root_into(frame, shape, pose, &mut out);
-    out
-}
-
-/// [`feather_beyond_root`] into a reused buffer (cleared first).
-fn feather_beyond_root_into(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose, out: &mut Vec<[Vec3; 3]>) {
-    let tris = crate::feather::feather_triangles(frame, shape, pose);
-    clip_beyond_root(frame, shape, pose, &tris, out);
-}
-
-/// [`feather_beyond_root_into`] from the feather's triangles at `pose`.
-fn clip_beyond_root(
-    frame: &RootFrame,
-    shape: &FeatherShape,
-    pose: FeatherPose,
-    tris: &[[Vec3; 3]],
-    out: &mut Vec<[Vec3; 3]>,
-) {
-    out.clear();
-    let axis = shaft_direction(frame, pose);
-    let cut = ROOT_ALLOWANCE * shape.length * pose.scale;
-    for t in tris {
-        clip_triangle(t, |p| (p - frame.position).dot(axis) - cut, out);
-    }
-}
-
-/// Clips a triangle to `side(p) ≥ 0` and appends the kept part as a fan.
-fn clip_triangle(t: &[Vec3; 3], side: impl Fn(Vec3) -> f32, out: &mut Vec<[Vec3; 3]>) {
-    let s = t.map(&side);
-    let mut poly: [Vec3; 4] = [Vec3::ZERO; 4];
-    let mut n = 0;
-    for k in 0..3 {
-        let (i, j) = (k, (k + 1) % 3);
-        if s[i] >= 0.0 {
-            poly[n] = t[i];
-            n += 1;
-        }
-        if (s[i] >= 0.0) != (s[j] >= 0.0) {
-            poly[n] = t[i] + (t[j] - t[i]) * (s[i] / (s[i] - s[j]));
-            n += 1;
-        }
-    }
-    for k in 1..n.saturating_sub(1) {
-        out.push([poly[0], poly[k], poly[k + 1]]);
-    }
-}
-
-/// Feathers that penetrate the body more than 5 % of their length from the
-/// root (measured along the posed shaft): their triangles there cross a
-/// body triangle (exact test), or, crossing none, have a corner under the
-/// skin (a feather drooping or rolling into the body from its root crosses
-/// the skin only in the tolerated part, or touches it along the shaft; a
-/// part of it is then inside). Sorted.
-pub fn body_penetrations(
-    frames: &[RootFrame],
-    shapes: &[FeatherShape],
-    poses: &[FeatherPose],
-    body: &BodyIndex,
-) -> Vec<u32> {
-    let hits: Vec<bool> = (0..frames.len())
-        .into_par_iter()
-        .map_init(
-            || (Vec::new(), Vec::new()),
-            |(part, ids), i| penetrates_body(&frames[i], &shapes[i], poses[i], body, part, ids),
-        )
-        .collect();
-    hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
-}
-
-/// Whether one feather penetrates the body more than 5 % of its length from
-/// the root (the test of [`body_penetrations`]). `part` and `ids` are
-/// scratch buffers.
-pub(crate) fn penetrates_body(
-    frame: &RootFrame,
-    shape: &FeatherShape,
-    pose: FeatherPose,
-    body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
-) -> bool {
-    penetrates_body_hinted(frame, shape, pose, body, part, ids, &mut None)
-}
-
-/// [`penetrates_body`], testing body triangle `hint` first (when the
-/// query would return it), and setting `hint` to the body triangle found
-/// crossing. The answer is the same whatever the hint: only the order of
-/// the tests changes, and a hint that crosses spares the box query.
-pub(crate) fn penetrates_body_hinted(
-    frame: &RootFrame,
-    shape: &FeatherShape,
-    pose: FeatherPose,
-    body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
-    hint: &mut Option<u32>,
-) -> bool {
-    let tris = crate::feather::feather_triangles(frame, shape, pose);
-    let plane = FlatPlane::of_straight_feather(frame, shape, pose);
-    penetrates_body_posed(frame, shape, pose, (&tris, plane), body, part, ids, hint)
-}
-
-/// [`penetrates_body_hinted`] given the feather's triangles at `pose` and
-/// its plane.
-#[allow(clippy::too_many_arguments)]
-fn penetrates_body_posed(
-    frame: &RootFrame,
-    shape: &FeatherShape,
-    pose: FeatherPose,
-    (tris, plane): (&[[Vec3; 3]], Option<FlatPlane>),
-    body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
-    hint: &mut Option<u32>,
-) -> bool {
-    if pose.scale <= 0.0 {
-        // A feather left out (size 0) is a point on the skin.
-        return false;
-    }
-    clip_beyond_root(frame, shape, pose, tris, part);
-    let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
-        return false;
-    };
-    // Each triangle prepared once for all its tests.
-    let mut prepared = [Prepared::of(&part[0]); 2 * MAX_TRIANGLES];
-    for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
-        *p = Prepared::of(t);
-    }
-    let prepared = &prepared[..part.len().min(2 * MAX_TRIANGLES)];
-    // Every part of a straight feather lies in its plane: a body triangle
-    // wholly on one side of it crosses none of them. Nor does a part lying
-    // wholly on one side of the body triangle (along its face normal).
-    let margin = posed_margin(frame, shape, pose);
-    let crossing = |t: u32| {
-        let corners = body.corners(t);
-        if plane.is_some_and(|p| p.apart(&corners)) {
-            return false;
-        }
-        let axis = SeparatingAxis::new(body.normal(t), &corners, margin);
-        let mut tri = None;
-        prepared.iter().zip(part.iter()).any(|(p, pt)| {
-            !axis.separates(pt) && prepared_intersect(p, tri.get_or_insert_with(|| Prepared::of(&corners)))
-        })
-    };
-    // The box query returns exactly the triangles whose boxes overlap
-    // `bounds` (none when `bounds` is not a proper box).
-    let queried = |h: u32| {
-        (h as usize) < body.triangle_count() && bounds.min.cmple(bounds.max).all() && body.bounds(h).overlaps(&bounds)
-    };
-    if hint.is_some_and(|h| queried(h) && crossing(h)) {
-        return true;
-    }
-    body.triangles_in_box(&bounds, ids);
-    let found = ids.iter().copied().find(|&t| crossing(t));
-    let crosses = found.is_some();
-    if found.is_some() {
-        *hint = found;
-    }
-    // Without a crossing each triangle lies on one side of the skin (the two
-    // vanes may lie on different sides, meeting it along the shaft): its
-    // first corner clearly off the skin tells which. The triangles of one
-    // clipped vane share their first corner, so each distinct corner is
-    // judged once.
-    if crosses {
-        return true;
-    }
-    let mut judged: [(Vec3, Option<bool>); 12] = [(Vec3::NAN, None); 12];
-    let mut count = 0;
-    let mut side = |p: Vec3| {
-        if let Some(&(_, s)) =
-            judged[..count].iter().find(|(q, _)| q.to_array().map(f32::to_bits) == p.to_array().map(f32::to_bits))
-        {
-            return s;
-        }
-        let s = side_of_skin(body, p, shape.length, ids);
-        if count < judged.len() {
-            judged[count] = (p, s);
-            count += 1;
-        }
-        s
-    };
-    part.iter().any(|t| t.iter().find_map(|&p| side(p)).is_some_and(|under| under))
-}
-
-/// A feather's triangles with their bounding boxes, for testing one
-/// feather against many with [`FeatherBoxes::intersects`].
-pub(crate) struct FeatherBoxes {
-    triangles: FeatherTriangles,
-    prepared: [Prepared; MAX_TRIANGLES],
-    boxes: [Aabb; MAX_TRIANGLES],
-    whole: Aabb,
-    plane: Option<FlatPlane>,
-}
-
-impl FeatherBoxes {
-    pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
-        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
-        let mut prepared = [Prepared::of(&triangles[0]); MAX_TRIANGLES];
-        for (k, t) in triangles.iter().enumerate().skip(1) {
-            boxes[k] = Aabb::of_triangle(t);
-            prepared[k] = Prepared::of(t);
-        }
-        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
-        Self { triangles: FeatherTriangles::from_slice(triangles), prepared, boxes, whole, plane: None }
-    }
-
-    /// The boxes of a flat part of a posed feather (one segment of a bent
-    /// shaft, which turns only at its joints): its plane rules triangles
-    /// out as in [`FeatherBoxes::of_feather`], with the same answers as
-    /// [`FeatherBoxes::new`].
-    pub(crate) fn of_flat_part(
-        triangles: &[[Vec3; 3]],
-        frame: &RootFrame,
-        shape: &FeatherShape,
-        pose: FeatherPose,
-    ) -> Self {
-        let plane = FlatPlane::of_flat_triangles(triangles, posed_margin(frame, shape, pose));
-        Self { plane, ..Self::new(triangles) }
-    }
-
-    /// The boxes of a feather at a pose, knowing the plane a straight
-    /// feather lies in (triangles wholly on one side of it are ruled out
-    /// without the exact test): the same answers as [`FeatherBoxes::new`].
-    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
-        let plane = FlatPlane::of_straight_feather(frame, shape, pose);
-        Self { plane, ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
-    }
-
-    /// [`penetrates_body_hinted`] for the feather and pose these boxes were
-    /// made of with [`FeatherBoxes::of_feather`] (its triangles and plane
-    /// made once for both tests).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn penetrates_body(
-        &self,
-        frame: &RootFrame,
-        shape: &FeatherShape,
-        pose: FeatherPose,
-        body: &BodyIndex,
-        part: &mut Vec<[Vec3; 3]>,
-        ids: &mut Vec<u32>,
-        hint: &mut Option<u32>,
-    ) -> bool {
-        penetrates_body_posed(frame, shape, pose, (&self.triangles, self.plane), body, part, ids, hint)
-    }
-
-    /// Whether these triangles intersect `b`'s (the exact test of
-    /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
-    /// feathers, then of each pair of triangles).
-    pub(crate) fn intersects(&self, b: &[[Vec3; 3]]) -> bool {
-        self.intersects_boxed(&BoxedTriangles::new(b))
-    }
-
-    /// [`FeatherBoxes::intersects`] against triangles whose boxes are
-    /// known: the same answer.
-    pub(crate) fn intersects_boxed(&self, b: &BoxedTriangles) -> bool {
-        if !self.whole.overlaps(&b.whole) {
-            return false;
-        }
-        // Over b's triangles first: most miss this feather's box, or lie
-        // beyond its plane, and are ruled out once instead of once per
-        // triangle of this feather (the same pairs reach the exact test).
-        let n = self.triangles.len();
-        b.triangles.iter().zip(&b.boxes).any(|(tb, box_b)| {
-            if box_b.is_point() || !self.whole.overlaps(box_b) || self.plane.is_some_and(|p| p.apart(tb)) {
-                return false;
-            }
-            let mut prepared_b = None;
-            self.prepared[..n].iter().zip(&self.boxes[..n]).any(|(ta, box_a)| {
-                !box_a.is_point()
-                    && box_a.overlaps(box_b)
-                    && prepared_intersect(ta, prepared_b.get_or_insert_with(|| Prepared::of(tb)))
-            })
-        })
-    }
-}
-
-/// The margin of the plane tests of a posed feather (see [`FlatPlane`]).
-fn posed_margin(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> f32 {
-    let length = shape.length * pose.scale.abs();
-    1e-4 * length + 1e-5 * (frame.position.abs().max_element() + length)
-}
-
-/// The plane a posed (flat) feather lies in, with a margin: a triangle
-/// wholly beyond the margin on one side cannot meet the feather, and the
-/// exact test, which treats contact within its tolerance as no
-/// intersection, would find none. The margin (1e-4 of the length, and
-/// 1e-5 of the coordinates) lies far above the rounding of the posed
-/// feather's f32 corners and of the other triangle's (relative 1e-7 of
-/// the coordinates); a doubtful triangle goes to the exact test.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FlatPlane {
-    normal: Vec3,
-    offset: f32,
-    margin: f32,
-}
-
-impl FlatPlane {
-    pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
-        let normal = feather_normal(frame, pose);
-        let margin = posed_margin(frame, shape, pose);
-        Self { normal, offset: normal.dot(frame.position), margin }
-    }
-
-    /// The plane of a straight feather; `None` for a bent one (its
-    /// segments lie in planes of their own).
-    pub(crate) fn of_straight_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Option<Self> {
-        pose.is_straight().then(|| Self::of_feather(frame, shape, pose))
-    }
-
-    /// The plane of triangles known to lie in one (a segment of a bent
-    /// feather), from the largest of them; `None` if all are degenerate.
-    pub(crate) fn of_flat_triangles(triangles: &[[Vec3; 3]], margin: f32) -> Option<Self> {
-        let (cross, corner) = triangles
-            .iter()
-            .map(|t| ((t[1] - t[0]).cross(t[2] - t[0]), t[0]))
-            .max_by(|a, b| a.0.length_squared().total_cmp(&b.0.length_squared()))?;
-        let normal = cross.try_normalize()?;
-        Some(Self { normal, offset: normal.dot(corner), margin })
-    }
-
-    /// Whether triangle `t` lies wholly on one side, beyond the margin.
-    #[inline]
-    pub(crate) fn apart(&self, t: &[Vec3; 3]) -> bool {
-        let d = t.map(|p| self.normal.dot(p) - self.offset);
-        (d[0] > self.margin && d[1] > self.margin && d[2] > self.margin)
-            || (d[0] < -self.margin && d[1] < -self.margin && d[2] < -self.margin)
-    }
-}
-
-/// A direction along which a triangle spans `[lo, hi]`: another triangle
-/// wholly beyond the span, by more than a margin, cannot meet it, and the
-/// exact test, which treats contact within its tolerance as none, finds
-/// no intersection either. Any direction separates soundly (it need not
-/// be an exact normal); the margin (at least the posed feather's
-/// [`FlatPlane`] margin, and 1e-5 of the span's coordinates) lies far
-/// above the rounding of the f32 projections.
-#[derive(Clone, Copy, Debug)]
-struct SeparatingAxis {
-    axis: Vec3,
-    lo: f32,
-    hi: f32,
-}
-
-impl SeparatingAxis {
-    /// The span of `t` along `axis` (a face normal; zero never separates),
-    /// widened by `margin` and the rounding allowance.
-    #[inline]
-    fn new(axis: Vec3, t: &[Vec3; 3], margin: f32) -> Self {
-        let d = t.map(|p| axis.dot(p));
-        let size = t[0].abs().max(t[1].abs()).max(t[2].abs()).max_element();
-        let m = margin + 1e-5 * size;
-        Self { axis, lo: d[0].min(d[1]).min(d[2]) - m, hi: d[0].max(d[1]).max(d[2]) + m }
-    }
-
-    /// Whether triangle `t` lies wholly beyond the span, on one side.
-    #[inline]
-    fn separates(&self, t: &[Vec3; 3]) -> bool {
-        let d = t.map(|p| self.axis.dot(p));
-        (d[0] > self.hi && d[1] > self.hi && d[2] > self.hi) || (d[0] < self.lo && d[1] < self.lo && d[2] < self.lo)
-    }
-}
-
-/// A feather's triangles (or its raised top) with their boxes, for testing
-/// against many posed feathers.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct BoxedTriangles {
-    triangles: FeatherTriangles,
-    boxes: [Aabb; MAX_TRIANGLES],
-    whole: Aabb,
-}
-
-impl BoxedTriangles {
-    pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
-        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
-        for (k, t) in triangles.iter().enumerate().skip(1) {
-            boxes[k] = Aabb::of_triangle(t);
-        }
-        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
-        Self { triangles: FeatherTriangles::from_slice(triangles), boxes, whole }
-    }
-
-    /// The box of all its triangles.
-    pub(crate) fn bounds(&self) -> &Aabb {
-        &self.whole
-    }
-}
-
-/// Which side of the body surface `p` is on: `Some(true)` under it,
-/// `Some(false)` above it, `None` on it (within the contact tolerance) or
-/// with no skin within `reach`. The side is judged from the nearest skin
-/// point by the normals of every face at the nearest distance, summed, so
-/// that edges and corners of the skin judge by all their faces. The search
-/// starts small and widens, since feather corners are usually near skin.
-fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -> Option<bool> {
-    let mut radius = reach / 64.0;
-    let nearest = loop {
-        if let Some(n) = body.closest_point(p, radius, scratch) {
-            break n;
-        }
-        if radius >= reach {
-            return None;
-        }
-        radius = (radius * 4.0).min(reach);
-    };
-    let tolerance = 1e-6 * reach.max(p.abs().max_element());
-    if nearest.distance <= tolerance {
-        return None;
-    }
-    let tie = nearest.distance * (1.0 + 1e-4) + tolerance;
-    let normal: Vec3 = scratch
-        .iter()
-        .filter(|&&t| (crate::body::closest_point_on_triangle(p, body.corners(t)) - p).length() <= tie)
-        .map(|&t| body.normal(t))
-        .sum();
-    Some((p - nearest.point).dot(normal) < 0.0)
-}
-
 /// Mean pitch in degrees (summed in index order).
 pub fn mean_pitch_deg(poses: &[FeatherPose]) -> f64 {
     if poses.is_empty() {
         return 0.0;
     }
     poses.iter().map(|p| p.pitch as f64).sum::<f64>() / poses.len() as f64 * (180.0 / std::f64::consts::PI)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn clipping_keeps_the_far_part() {
-        let t = [Vec3::ZERO, Vec3::new(10.0, 0.0, 0.0), Vec3::new(4.0, 2.0, 0.0)];
-        let mut out = Vec::new();
-        clip_triangle(&t, |p| p.x - 1.0, &mut out);
-        assert_eq!(out.len(), 2);
-        let area: f32 = out.iter().map(|t| 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()).sum();
-        // Area 10, less the corner x ≤ 1 under the edge y = x/2 (area 1/4).
-        let (whole, cut_off) = (10.0, 0.25);
-        assert!((area - (whole - cut_off)).abs() < 1e-4, "{area}");
-        assert!(out.iter().flatten().all(|p| p.x >= 1.0 - 1e-6));
-    }
 }

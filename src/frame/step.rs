@@ -1,10 +1,11 @@
 //! One animation frame, incremental (paper §3.3) or legacy (the 2015
-//! method), applied to a coat in place (DESIGN.md §5):
+//! method), applied to a coat in place (DESIGN.md §5): the frame-to-frame
+//! variants of the order and adjust phases of [`crate::frame`]:
 //! 1. re-pose every root from the deformed mesh; feathers keep their pitch
 //!    and roll relative to their own frame (incremental: neighbourhoods and
 //!    obstacle candidates follow the current pose);
 //! 2. `R_k`: feathers whose surroundings moved relative to them since they
-//!    were last adjusted ([`super::motion::Staleness`]), by more
+//!    were last adjusted ([`crate::coat::Staleness`]), by more
 //!    than `θs·L` (a feather's tip moves that far when its pitch changes by
 //!    θs, the change the propagation rule already lets pass). The
 //!    surroundings are the k nearest roots (their priorities) and the
@@ -29,7 +30,7 @@
 //! remain are for drift: the seeds are the feathers whose surroundings
 //! moved by more than the drift tolerance times their length (net: the
 //! surroundings recorded when the feather was last adjusted, compared
-//! with where they lie now; see [`super::motion`]), and
+//! with where they lie now; see [`crate::animation::motion`]), and
 //! propagation passes on a feather sinking, shrinking or rolling by more
 //! than the drift tolerance (one that rises into what lies on it fails
 //! their checks). A feather whose obstacles changed with the order is
@@ -41,18 +42,20 @@
 //! +0.21° to +0.27° over rebuild's, with 0 pairs and penetrations. `R_k` (at θs, by the same net motion)
 //! still selects the pairs whose priorities are recomputed.
 
-use super::contact::{Contacts, Footprint, Sphere};
-use super::motion::{Oriented, Placement, RootMap, orientation, root_maps};
+use super::phases::{self, Workspace};
 use crate::Mode;
 use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
-use crate::body::{Aabb, BodyIndex};
-use crate::coat::{Coat, Dressing, Workspace};
+use crate::animation::contact::{Candidates, Contacts, Footprint, Posed, Sphere};
+use crate::animation::motion::{RootMap, root_maps};
+use crate::body::BodyIndex;
+use crate::coat::{Coat, Dressing, Oriented, Placement, orientation};
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::geometry::RootFrame;
 use crate::ordering::{Priorities, PriorityOrder};
 use crate::progress::{Phase, Progress};
 use crate::stats::FrameReport;
+use crate::triangle_grid::Aabb;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -108,7 +111,7 @@ pub struct StepWorkspace {
 }
 
 /// Advances `coat` to `positions` (welded) by the incremental or legacy
-/// rule of `dressing.mode`.
+/// rule of `dressing.config.mode`.
 pub fn step_coat(
     coat: &mut Coat,
     dressing: &Dressing,
@@ -119,13 +122,13 @@ pub fn step_coat(
 ) -> Result<()> {
     let start = Instant::now();
     let n = dressing.len();
-    let incremental = dressing.mode == Mode::Incremental;
+    let incremental = dressing.config.mode == Mode::Incremental;
     // 1. Record where the surroundings of the feathers adjusted last lie;
     // re-pose; remember where everything was.
     if coat.staleness.len() != n {
         coat.staleness.reset(n);
     }
-    let verify = incremental && dressing.drift_tolerance > dressing.theta_s;
+    let verify = incremental && dressing.config.drift_tolerance > dressing.config.theta_s;
     if verify {
         record_placements(coat, dressing, step);
     }
@@ -133,14 +136,13 @@ pub fn step_coat(
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     let mut neighbourhood_seconds = 0.0;
-    if incremental && dressing.recompute_neighbourhoods {
-        let neighbourhood_start = Instant::now();
-        coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
-        neighbourhood_seconds = neighbourhood_start.elapsed().as_secs_f64();
+    if incremental && dressing.config.recompute_neighbourhoods {
+        neighbourhood_seconds = phases::neighbourhoods(coat, dressing);
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
-    step.contacts.update(&coat.frames, &dressing.shapes, &coat.poses, &dressing.adjust_params, offsets, indices, rank);
+    let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
+    step.contacts.update(posed, &dressing.adjust_params, Candidates { offsets, indices, rank });
     progress.check(Phase::Ordering, 0.3)?;
 
     // 2. R_k from the relative motion of the roots since the last frame.
@@ -148,8 +150,8 @@ pub fn step_coat(
     surroundings_displacement(coat, dressing, step, verify);
     step.seeds.clear();
     step.seeds.resize(n, false);
-    let drift = if verify { dressing.drift_tolerance } else { dressing.theta_s };
-    let limit = |i: usize| dressing.theta_s * dressing.shapes[i].length;
+    let drift = if verify { dressing.config.drift_tolerance } else { dressing.config.theta_s };
+    let limit = |i: usize| dressing.config.theta_s * dressing.shapes[i].length;
     let drift_limit = |i: usize| drift * dressing.shapes[i].length;
     if verify {
         coat.staleness.set_net(&step.net, drift_limit, &mut step.seeds);
@@ -175,8 +177,8 @@ pub fn step_coat(
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, neighbourhood_seconds, ..FrameReport::default() };
     if incremental {
-        let priorities = Priorities::improved(&coat.frames, dressing.gamma, dressing.lambda);
-        let pairs = dressing.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
+        let priorities = Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda);
+        let pairs = dressing.config.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
         let stats = coat.order.update_frame(pairs, &step.r_k, &priorities);
         report.priority_changes = stats.priority_changes;
         report.reversals = stats.reversals_done;
@@ -191,28 +193,27 @@ pub fn step_coat(
     progress.check(Phase::Adjusting, 0.0)?;
 
     // 4. Readjust R*_k in order, propagating past θs.
-    coat.body.rebuild(&coat.positions, &dressing.triangles);
+    phases::body(coat, dressing);
     if verify {
         watch_other_parts(coat, dressing, &mut step.suspects, &mut step.body_ids);
     }
-    let steps = if dressing.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
+    let steps = if dressing.config.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
     let stats = if n == 0 {
         AdjustStats::default()
     } else {
         let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
         let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
-        let rows = step.contacts.obstacle_rows(offsets, indices, coat.order.ranks());
+        let rows = step.contacts.obstacle_rows(Candidates { offsets, indices, rank: coat.order.ranks() });
         let full = CandidateLists::new(offsets, indices);
         work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
-        let settle_rate = if incremental { dressing.settle_rate } else { 0.0 };
+        let settle_rate = if incremental { dressing.config.settle_rate } else { 0.0 };
         work.adjuster.settle_next_run(settle_rate);
         let stats = pass.run(
             Walk::Levels,
             &mut work.adjuster,
             &mut coat.poses,
             CandidateLists::new(rows.0, rows.1),
-            &step.seeds,
-            verify.then_some(&step.suspects[..]),
+            pass.selection(&step.seeds, verify.then_some(&step.suspects[..])),
             &|done| progress.check(Phase::Adjusting, done).is_ok(),
         );
         // A stopped adjustment (None) has set the progress's stop flag.
@@ -220,15 +221,9 @@ pub fn step_coat(
         let mut stats = stats.unwrap_or_default();
         coat.settling.clear();
         coat.settling.extend_from_slice(work.adjuster.settling());
-        let missed = step.contacts.missed(
-            &coat.frames,
-            &dressing.shapes,
-            &coat.poses,
-            offsets,
-            indices,
-            coat.order.ranks(),
-            work.adjuster.adjusted(),
-        );
+        let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
+        let candidates = Candidates { offsets, indices, rank: coat.order.ranks() };
+        let missed = step.contacts.missed(posed, candidates, work.adjuster.adjusted());
         if missed > 0 {
             // Feathers an earlier one now lies on unlisted: readjust them
             // (and, past θs, what lies on them) with their full lists.
@@ -245,8 +240,7 @@ pub fn step_coat(
                 &mut work.adjuster,
                 &mut coat.poses,
                 CandidateLists::new(offsets, indices),
-                seeds,
-                verify.then_some(&step.no_suspects[..]),
+                pass.selection(seeds, verify.then_some(&step.no_suspects[..])),
                 &|_| progress.check(Phase::Adjusting, 1.0).is_ok(),
             );
             progress.check(Phase::Adjusting, 1.0)?;
@@ -295,27 +289,24 @@ impl Pass<'_> {
     fn selection<'s>(&self, seeds: &'s [bool], suspects: Option<&'s [bool]>) -> Selection<'s> {
         let d = self.dressing;
         match suspects {
-            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.drift_tolerance },
-            None => Selection::Propagate { seeds, threshold: d.theta_s },
+            Some(suspects) => Selection::Verify { seeds, suspects, threshold: d.config.drift_tolerance },
+            None => Selection::Propagate { seeds, threshold: d.config.theta_s },
         }
     }
 
-    /// Adjusts `seeds` in order, and past θs what lies on them, with
-    /// `candidates` as obstacle lists, by levels or one feather after the
-    /// other (see [`Walk`]); the same poses either way.
-    #[allow(clippy::too_many_arguments)]
+    /// Adjusts the seeds of `selection` in order, and past θs what lies on
+    /// them, with `candidates` as obstacle lists, by levels or one feather
+    /// after the other (see [`Walk`]); the same poses either way.
     fn run(
         &self,
         walk: Walk,
         adjuster: &mut Adjuster,
         poses: &mut [FeatherPose],
         candidates: CandidateLists<'_>,
-        seeds: &[bool],
-        suspects: Option<&[bool]>,
+        selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
-        let selection = self.selection(seeds, suspects);
         let run = match walk {
             Walk::Levels => Adjuster::adjust_in_order_until,
             Walk::Sparse => Adjuster::adjust_sparse_until,

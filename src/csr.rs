@@ -1,0 +1,149 @@
+//! Compressed sparse rows ([`Csr`]): items grouped by row in one array, row
+//! `r` at `items[offsets[r]..offsets[r + 1]]`, built by a counting sort that
+//! keeps, within a row, the order in which the items were placed. Rebuilding
+//! reuses every buffer.
+//!
+//! Built either in one call ([`Csr::rebuild`], from a function giving the
+//! same `(row, item)` sequence twice) or in its two passes when the caller
+//! walks its own structures: [`Csr::begin`], [`Csr::count`] for every item,
+//! [`Csr::allocate`], then [`Csr::place`] for the same items in the order
+//! they should keep.
+
+use std::ops::Range;
+
+/// Items grouped by row (module notes).
+#[derive(Clone, Debug, Default)]
+pub struct Csr<T> {
+    offsets: Vec<u32>,
+    items: Vec<T>,
+    /// Where the next placed item of each row goes (during a build).
+    cursor: Vec<u32>,
+}
+
+impl<T: Copy + Default> Csr<T> {
+    /// No rows.
+    pub fn new() -> Self {
+        Self { offsets: Vec::new(), items: Vec::new(), cursor: Vec::new() }
+    }
+
+    /// Rebuilds with `rows` rows from the `(row, item)` pairs `entries`
+    /// yields (called twice; it must yield the same sequence both times).
+    /// Within a row the items keep the order of the sequence.
+    pub fn rebuild<I: IntoIterator<Item = (usize, T)>>(&mut self, rows: usize, entries: impl Fn() -> I) {
+        self.begin(rows);
+        entries().into_iter().for_each(|(r, _)| self.count(r));
+        self.allocate();
+        entries().into_iter().for_each(|(r, item)| self.place(r, item));
+    }
+
+    /// First pass of a build: `rows` empty rows, every count 0.
+    pub fn begin(&mut self, rows: usize) {
+        self.offsets.clear();
+        self.offsets.resize(rows + 1, 0);
+    }
+
+    /// First pass: one more item for row `r`.
+    #[inline]
+    pub fn count(&mut self, r: usize) {
+        self.offsets[r + 1] += 1;
+    }
+
+    /// Between the passes: turns the counts into offsets and sizes the items.
+    pub fn allocate(&mut self) {
+        let rows = self.rows();
+        for r in 0..rows {
+            self.offsets[r + 1] += self.offsets[r];
+        }
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.offsets[..rows]);
+        self.items.clear();
+        self.items.resize(self.offsets[rows] as usize, T::default());
+    }
+
+    /// Second pass: the next item of row `r` (as many per row as counted).
+    #[inline]
+    pub fn place(&mut self, r: usize, item: T) {
+        let slot = &mut self.cursor[r];
+        self.items[*slot as usize] = item;
+        *slot += 1;
+    }
+
+    /// Number of rows.
+    #[inline]
+    pub fn rows(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Row `r`'s items (none for a row past the end).
+    #[inline]
+    pub fn row(&self, r: usize) -> &[T] {
+        &self.items[self.span(r)]
+    }
+
+    /// Row `r`'s items, to reorder them in place.
+    #[inline]
+    pub fn row_mut(&mut self, r: usize) -> &mut [T] {
+        let span = self.span(r);
+        &mut self.items[span]
+    }
+
+    /// Where row `r`'s items lie in [`items`](Self::items) (empty past the end).
+    #[inline]
+    pub fn span(&self, r: usize) -> Range<usize> {
+        match (self.offsets.get(r), self.offsets.get(r + 1)) {
+            (Some(&a), Some(&b)) => a as usize..b as usize,
+            _ => 0..0,
+        }
+    }
+
+    /// Every item, row after row.
+    #[inline]
+    pub fn items(&self) -> &[T] {
+        &self.items
+    }
+
+    /// The row offsets (`rows() + 1` of them, or none before a build).
+    #[inline]
+    pub fn offsets(&self) -> &[u32] {
+        &self.offsets
+    }
+
+    /// Number of items in all rows.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether no row holds an item.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_keep_the_order_items_were_placed_in() {
+        let mut csr = Csr::new();
+        let entries = [(2, 'a'), (0, 'b'), (2, 'c'), (3, 'd'), (0, 'e')];
+        csr.rebuild(4, || entries);
+        assert_eq!(csr.rows(), 4);
+        assert_eq!(csr.row(0), &['b', 'e']);
+        assert!(csr.row(1).is_empty());
+        assert_eq!(csr.row(2), &['a', 'c']);
+        assert_eq!(csr.row(3), &['d']);
+        assert!(csr.row(9).is_empty());
+        assert_eq!(csr.offsets(), &[0, 2, 2, 4, 5]);
+        assert_eq!(csr.len(), 5);
+        // A rebuild forgets the old rows and reuses the buffers.
+        csr.begin(2);
+        csr.count(1);
+        csr.allocate();
+        csr.place(1, 'z');
+        assert_eq!((csr.rows(), csr.row(0).len(), csr.row(1)), (2, 0, &['z'][..]));
+        csr.row_mut(1)[0] = 'y';
+        assert_eq!(csr.items(), &['y']);
+        assert!(Csr::<u32>::new().row(0).is_empty() && Csr::<u32>::new().rows() == 0);
+    }
+}

@@ -1,0 +1,115 @@
+//! A system's life: create (from a config and a rest mesh), destroy, and
+//! the two calls that move it to a new pose, step (frame to frame) and
+//! evaluate (from scratch).
+
+use super::boundary::{PlumageSystem, quietly, with_system, without_system};
+use super::config::{HostConfig, PlumageConfig, read_config};
+use super::convention::Failure;
+use super::mesh::{PlumageMeshDesc, checked_len, read_mesh};
+
+/// Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).
+/// On success `*out` receives the new system; on any error `*out` is set to
+/// NULL (when `out` is not NULL) and the message is available from
+/// `plumage_system_last_error(NULL, ...)` on the same thread.
+///
+/// # Safety
+/// `cfg` is NULL or points to a `PlumageConfig` whose `struct_size` bytes are
+/// readable; `rest` is NULL or points to a `PlumageMeshDesc` whose arrays hold
+/// the counts it states; `out` is NULL or points to writable memory for one
+/// pointer. Nothing is kept after the call returns.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_create(
+    cfg: *const PlumageConfig,
+    rest: *const PlumageMeshDesc,
+    out: *mut *mut PlumageSystem,
+) -> u32 {
+    without_system(|| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        // SAFETY: non-NULL out (contract: points to a PlumageSystem*).
+        unsafe { *out = std::ptr::null_mut() };
+        // SAFETY: forwarded pointer contracts of this function.
+        let HostConfig { config, progress: host_progress, parallel_for } = unsafe { read_config(cfg) }?;
+        let mesh = unsafe { read_mesh(rest) }?;
+        let progress = match &host_progress {
+            Some(p) => crate::progress::Progress::to(p),
+            None => crate::progress::Progress::none(),
+        };
+        let system = crate::System::new_with_parallel_for(&config, &mesh, &progress, parallel_for)?;
+        let handle = Box::into_raw(Box::new(PlumageSystem::new(system, host_progress)));
+        // SAFETY: as above.
+        unsafe { *out = handle };
+        Ok(())
+    })
+}
+
+/// Frees a system and everything it owns. NULL is a no-op. Works on a
+/// poisoned system too.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`, not used again
+/// afterwards and not in use by another thread.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
+    if sys.is_null() {
+        return;
+    }
+    let _ = quietly(|| {
+        // SAFETY: from plumage_system_create, not yet destroyed (contract).
+        drop(unsafe { Box::from_raw(sys) });
+    });
+}
+
+/// Advances the animation by one frame: `positions` holds xyz for each of
+/// the rest mesh's `vertex_count` vertices, in the caller's numbering. On
+/// any error the system is exactly as before the call.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+/// readable floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_step(
+    sys: *mut PlumageSystem,
+    positions: *const f32,
+    vertex_count: usize,
+) -> u32 {
+    with_system(sys, |system, progress| {
+        // SAFETY: forwarded contract.
+        let frame = unsafe { frame_positions(positions, vertex_count) }?;
+        system.step_with_progress(frame, progress)?;
+        Ok(())
+    })
+}
+
+/// Solves the pose given by `positions` from scratch, independent of the
+/// frames stepped before. On any error the system is exactly as before.
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create` that no other
+/// thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
+/// readable floats.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_evaluate(
+    sys: *mut PlumageSystem,
+    positions: *const f32,
+    vertex_count: usize,
+) -> u32 {
+    with_system(sys, |system, progress| {
+        // SAFETY: forwarded contract.
+        let frame = unsafe { frame_positions(positions, vertex_count) }?;
+        system.evaluate_with_progress(frame, progress)?;
+        Ok(())
+    })
+}
+
+/// The frame's positions as a slice, after NULL and size checks.
+unsafe fn frame_positions<'a>(positions: *const f32, vertex_count: usize) -> Result<&'a [f32], Failure> {
+    if positions.is_null() {
+        return Err(Failure::null("positions"));
+    }
+    let n = checked_len(vertex_count, 3, "vertex_count")?;
+    // SAFETY: non-NULL, `3 * vertex_count` floats (contract).
+    Ok(unsafe { std::slice::from_raw_parts(positions, n) })
+}

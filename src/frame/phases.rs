@@ -1,0 +1,66 @@
+//! The phases a from-scratch solve and a frame-to-frame step share (see the
+//! module notes of [`crate::frame`] for the whole sequence).
+
+use crate::Mode;
+use crate::adjustment::Adjuster;
+use crate::coat::{Coat, Dressing};
+use crate::feather::shaft_direction;
+use crate::ordering::Priorities;
+use crate::stats::OrderingReport;
+use glam::Vec3;
+use std::time::Instant;
+
+/// Buffers reused from call to call by every phase; never part of the state.
+#[derive(Debug, Default)]
+pub struct Workspace {
+    /// The adjuster's own scratch.
+    pub adjuster: Adjuster,
+    /// ΔP of each pair.
+    pub deltas: Vec<f32>,
+    /// Shaft directions (the legacy rule's `o_i`).
+    pub orientations: Vec<Vec3>,
+}
+
+/// Phase 2, neighbourhoods: the k nearest roots, the pair set and the
+/// obstacle candidates at the coat's current root frames. Returns the
+/// seconds it took.
+pub(super) fn neighbourhoods(coat: &mut Coat, dressing: &Dressing) -> f64 {
+    let start = Instant::now();
+    coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
+    start.elapsed().as_secs_f64()
+}
+
+/// Phase 3 from scratch, the static order: the priority difference of
+/// every pair (Eq. 3, or Eq. 2 with the feathers' current shaft directions
+/// for the legacy mode), then the priority DAG made acyclic and its
+/// topological order. `started` is when the ordering began (the report's
+/// seconds count from there, neighbourhoods included).
+pub(super) fn static_order(coat: &mut Coat, dressing: &Dressing, work: &mut Workspace, started: Instant) {
+    let pairs = coat.neighbourhoods.pairs();
+    match dressing.config.mode {
+        Mode::Legacy => {
+            // Eq. 2 with the feathers' own orientations (flat: o = õ).
+            work.orientations.clear();
+            work.orientations.extend(coat.frames.iter().zip(&coat.poses).map(|(f, p)| shaft_direction(f, *p)));
+            Priorities::legacy(&coat.frames, &work.orientations, dressing.config.gamma)
+                .deltas_of_pairs(pairs, &mut work.deltas)
+        }
+        Mode::Incremental | Mode::Rebuild => {
+            Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda)
+                .deltas_of_pairs(pairs, &mut work.deltas)
+        }
+    }
+    let report = coat.order.build_static(dressing.len(), pairs, &work.deltas);
+    coat.ordering_report = OrderingReport {
+        pairs: report.pairs,
+        edges: report.edges,
+        dropped_edges: report.dropped,
+        violations: report.violations,
+        seconds: started.elapsed().as_secs_f64(),
+    };
+}
+
+/// Phase 4, body: the body's triangles at the coat's positions, indexed.
+pub(super) fn body(coat: &mut Coat, dressing: &Dressing) {
+    coat.body.rebuild(&coat.positions, &dressing.triangles);
+}

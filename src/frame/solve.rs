@@ -1,0 +1,74 @@
+//! The from-scratch solve of a coat at one pose (create, evaluate, every
+//! frame of the `rebuild` mode): every phase of [`crate::frame`], the
+//! order static and every feather adjusted from a flat start.
+
+use super::phases::{self, Workspace};
+use crate::adjustment::{AdjustSteps, CandidateLists, Selection};
+use crate::coat::{Coat, Dressing};
+use crate::error::Result;
+use crate::feather::FeatherPose;
+use crate::progress::{Phase, Progress};
+use crate::stats::FrameReport;
+use glam::Vec3;
+use std::time::Instant;
+
+/// Solves `coat` from scratch at the welded `positions`: neighbourhoods,
+/// the static order (Eq. 3, or Eq. 2 for the legacy mode) and the full
+/// three-step adjustment of every feather from a flat start.
+pub fn solve(
+    coat: &mut Coat,
+    dressing: &Dressing,
+    positions: &[Vec3],
+    work: &mut Workspace,
+    progress: &Progress,
+) -> Result<()> {
+    let start = Instant::now();
+    coat.pose(dressing, positions);
+    progress.check(Phase::Ordering, 0.0)?;
+    let order_start = Instant::now();
+    let neighbourhood_seconds = phases::neighbourhoods(coat, dressing);
+    progress.check(Phase::Ordering, 0.5)?;
+    coat.poses.clear();
+    coat.poses.resize(dressing.len(), FeatherPose::default());
+    phases::static_order(coat, dressing, work, order_start);
+    progress.check(Phase::Adjusting, 0.0)?;
+    phases::body(coat, dressing);
+    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let stats = work.adjuster.adjust_in_order_until(
+        &coat.frames,
+        &dressing.shapes,
+        &mut coat.poses,
+        coat.order.order(),
+        coat.order.ranks(),
+        CandidateLists::new(offsets, indices),
+        &coat.body,
+        &dressing.adjust_params,
+        AdjustSteps::Full,
+        Selection::All,
+        &|done| progress.check(Phase::Adjusting, done).is_ok(),
+    );
+    // A stopped adjustment (None) has set the progress's stop flag.
+    progress.check(Phase::Adjusting, 1.0)?;
+    let stats = stats.unwrap_or_default();
+    coat.staleness.reset(dressing.len());
+    coat.settling.clear();
+    coat.frame_report = FrameReport {
+        frame_index: coat.frame_index,
+        adjusted: stats.adjusted,
+        deformed: 0,
+        seeds: dressing.len(),
+        verified: 0,
+        collision_tests: stats.collision_tests,
+        priority_changes: 0,
+        reversals: 0,
+        reversals_refused: 0,
+        cycles_broken: 0,
+        clamped: stats.clamped,
+        reorder_seconds: coat.ordering_report.seconds,
+        adjust_seconds: stats.seconds,
+        step_seconds: start.elapsed().as_secs_f64(),
+        neighbourhood_seconds,
+        levels: stats.levels,
+    };
+    Ok(())
+}

@@ -1,0 +1,303 @@
+//! `System`: the safe Rust face of Plumage. It owns the welded mesh, the
+//! feathers' rest binding (the dressing) and their state at the current pose
+//! (the coat), and is what the FFI handle wraps.
+
+use crate::animation::coherence::{PoseChanges, pose_changes};
+use crate::coat::{Coat, Dressing};
+use crate::config::Config;
+use crate::error::Result;
+use crate::feather::{FeatherMesh, FeatherPose};
+use crate::field::Fields;
+use crate::frame::{StepWorkspace, Workspace};
+use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
+use crate::pool::WorkerPool;
+use crate::progress::{Phase, Progress};
+use crate::sampling::sample_roots_with_progress;
+use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport};
+use crate::surface::Surface;
+use glam::Vec3;
+use std::collections::BTreeMap;
+
+mod state;
+mod validate;
+
+/// A feathered surface: created at the rest pose, then stepped frame by frame.
+#[derive(Debug)]
+pub struct System {
+    pool: WorkerPool,
+    mesh: WeldedMesh,
+    dressing: Dressing,
+    sampling: SamplingReport,
+    coat: Coat,
+    records: Vec<FeatherRecord>,
+    triangles: Vec<[f32; 3]>,
+    work: Workspace,
+    step_work: StepWorkspace,
+    frame_positions: Vec<Vec3>,
+    /// The poses before the last step or evaluate, and how they changed.
+    previous_poses: Vec<FeatherPose>,
+    pose_changes: PoseChanges,
+    /// State blobs by frame count (see [`System::seek`]).
+    checkpoints: BTreeMap<u64, Vec<u8>>,
+    /// Whether the coat is what stepping from create gives (no evaluate or
+    /// load since create or the last seek): only then are checkpoints kept.
+    on_playback: bool,
+    #[cfg(feature = "test-hooks")]
+    test_panic: std::sync::atomic::AtomicBool,
+}
+
+impl System {
+    /// Checks the configuration and the mesh, plants the roots, orders and
+    /// adjusts the feathers at the rest pose.
+    pub fn new(config: &Config, mesh: &MeshInput<'_>) -> Result<Self> {
+        Self::new_with_progress(config, mesh, &Progress::none())
+    }
+
+    /// As [`System::new`], reporting to `progress`, which may stop it (then
+    /// nothing is created).
+    pub fn new_with_progress(config: &Config, mesh: &MeshInput<'_>, progress: &Progress) -> Result<Self> {
+        Self::new_with_parallel_for(config, mesh, progress, None)
+    }
+
+    /// As [`System::new_with_progress`]; with `parallel_for`, every parallel
+    /// section of this system runs through the host's parallel-for,
+    /// `config.threads` tasks at a time (see [`crate::pool`]).
+    pub fn new_with_parallel_for(
+        config: &Config,
+        mesh: &MeshInput<'_>,
+        progress: &Progress,
+        parallel_for: Option<std::sync::Arc<dyn crate::pool::ParallelFor>>,
+    ) -> Result<Self> {
+        config.validate()?;
+        progress.check(Phase::Preparing, 0.0)?;
+        mesh.check()?;
+        let welded = weld(mesh)?;
+        progress.check(Phase::Preparing, 0.3)?;
+        let pool = match parallel_for {
+            Some(host) => WorkerPool::with_parallel_for(config.threads, host)?,
+            None => WorkerPool::new(config.threads)?,
+        };
+        let surface = Surface::new(&welded);
+        progress.check(Phase::Preparing, 0.6)?;
+        let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
+        let fields = Fields::new(
+            &welded,
+            &surface,
+            attribute(mesh.orientations, 3).as_deref(),
+            attribute(mesh.spacing_scale, 1).as_deref(),
+            attribute(mesh.length_scale, 1).as_deref(),
+            attribute(mesh.width_scale, 1).as_deref(),
+            config,
+        )?;
+        progress.check(Phase::Sampling, 0.0)?;
+        let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
+        progress.check(Phase::Sampling, 1.0)?;
+        let mut dressing = Dressing::new(surface, &welded, sampling.roots, config);
+        if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
+            dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
+        }
+        let sampling_report = SamplingReport {
+            roots: dressing.len(),
+            spacing: sampling.spacing,
+            relative_radius: sampling.metrics.relative_radius,
+            coverage_gap: sampling.metrics.coverage_gap,
+            alignment: sampling.metrics.alignment,
+            seconds: sampling.seconds,
+        };
+        let mut system = Self {
+            pool,
+            mesh: welded,
+            dressing,
+            sampling: sampling_report,
+            coat: Coat::default(),
+            records: Vec::new(),
+            triangles: Vec::new(),
+            work: Workspace::default(),
+            step_work: StepWorkspace::default(),
+            frame_positions: Vec::new(),
+            previous_poses: Vec::new(),
+            pose_changes: PoseChanges::default(),
+            checkpoints: BTreeMap::new(),
+            on_playback: true,
+            #[cfg(feature = "test-hooks")]
+            test_panic: Default::default(),
+        };
+        let rest = system.mesh.positions.clone();
+        let Self { pool, dressing, coat, work, .. } = &mut system;
+        pool.install(|| crate::frame::solve(coat, dressing, &rest, work, progress))?;
+        system.export();
+        system.keep_checkpoint();
+        Ok(system)
+    }
+
+    /// Test builds only: the next step, evaluate or validate panics.
+    #[cfg(feature = "test-hooks")]
+    pub fn arm_test_panic(&mut self) {
+        self.test_panic.store(true, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    fn maybe_test_panic(&self) {
+        #[cfg(feature = "test-hooks")]
+        if self.test_panic.swap(false, std::sync::atomic::Ordering::SeqCst) {
+            panic!("forced by plumage_testing_panic_on_next_call");
+        }
+    }
+
+    /// The configuration the system was created with.
+    pub fn config(&self) -> &Config {
+        &self.dressing.config
+    }
+
+    /// The welded mesh (rest pose).
+    pub fn mesh(&self) -> &WeldedMesh {
+        &self.mesh
+    }
+
+    /// Welded vertex positions of the current pose.
+    pub fn current_positions(&self) -> &[Vec3] {
+        &self.coat.positions
+    }
+
+    /// Number of vertices every frame must provide (the caller's numbering).
+    pub fn vertex_count(&self) -> usize {
+        self.mesh.caller_vertex_count()
+    }
+
+    /// Frames stepped since creation (evaluate does not count).
+    pub fn frames_stepped(&self) -> u64 {
+        self.coat.frame_index
+    }
+
+    /// Number of worker threads of the system's pool.
+    pub fn threads(&self) -> usize {
+        self.pool.threads()
+    }
+
+    /// Number of triangles of the caller's rest mesh (degenerate and
+    /// duplicate ones included).
+    pub fn caller_triangle_count(&self) -> usize {
+        self.mesh.triangles.len() + self.mesh.degenerate_triangles + self.mesh.duplicate_triangles
+    }
+
+    /// Number of feathers.
+    pub fn feather_count(&self) -> usize {
+        self.records.len()
+    }
+
+    /// The feathers at the current pose, in a stable order (by root).
+    pub fn feathers(&self) -> &[FeatherRecord] {
+        &self.records
+    }
+
+    /// Each feather's triangles (see [`crate::feather::FeatherTriangles`]:
+    /// two, one per vane, for the kite) as their corners, world space,
+    /// feather after feather in the order of [`System::feathers`].
+    pub fn feather_triangles(&self) -> &[[f32; 3]] {
+        &self.triangles
+    }
+
+    /// Every feather as a mesh (vertices, normals, UVs, triangles, the
+    /// feather of each vertex), in the order of [`System::feathers`].
+    pub fn feather_mesh(&self) -> FeatherMesh {
+        FeatherMesh::build(&self.coat.frames, &self.dressing.shapes, &self.coat.poses)
+    }
+
+    /// Which feathers the last create, step or evaluate readjusted (one flag
+    /// per feather, in the order of [`System::feathers`]).
+    pub fn readjusted(&self) -> &[bool] {
+        self.work.adjuster.adjusted()
+    }
+
+    /// Sampling figures of the roots.
+    pub fn sampling_report(&self) -> Option<SamplingReport> {
+        Some(self.sampling)
+    }
+
+    /// Figures of the static order built by create, evaluate or a rebuild frame.
+    pub fn ordering_report(&self) -> Option<OrderingReport> {
+        Some(self.coat.ordering_report)
+    }
+
+    /// What the last create, step or evaluate did.
+    pub fn frame_report(&self) -> Option<FrameReport> {
+        Some(self.coat.frame_report)
+    }
+
+    /// How the feathers' poses relative to their roots changed in the last
+    /// step or evaluate (none after create or a load): the pops figure.
+    pub fn pose_changes(&self) -> PoseChanges {
+        self.pose_changes
+    }
+
+    /// Advances to the next animation frame by the system's mode. On error
+    /// nothing changes.
+    pub fn step(&mut self, positions: &[f32]) -> Result<()> {
+        self.step_with_progress(positions, &Progress::none())
+    }
+
+    /// As [`System::step`], reporting to `progress`, which may stop it.
+    pub fn step_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
+        self.maybe_test_panic();
+        check_frame_positions(positions, self.vertex_count())?;
+        self.transaction(positions, progress, |s, p| {
+            let Self { pool, dressing, coat, work, step_work, frame_positions, .. } = s;
+            pool.install(|| crate::frame::advance(coat, dressing, frame_positions, work, step_work, p))
+        })?;
+        self.keep_checkpoint();
+        Ok(())
+    }
+
+    /// Solves the pose from scratch, independent of history (the frame count
+    /// is kept). On error nothing changes.
+    pub fn evaluate(&mut self, positions: &[f32]) -> Result<()> {
+        self.evaluate_with_progress(positions, &Progress::none())
+    }
+
+    /// As [`System::evaluate`], reporting to `progress`, which may stop it.
+    pub fn evaluate_with_progress(&mut self, positions: &[f32], progress: &Progress) -> Result<()> {
+        self.maybe_test_panic();
+        check_frame_positions(positions, self.vertex_count())?;
+        self.transaction(positions, progress, |s, p| {
+            let Self { pool, dressing, coat, work, frame_positions, .. } = s;
+            pool.install(|| crate::frame::solve(coat, dressing, frame_positions, work, p))
+        })?;
+        // Later steps no longer continue the playback: keep no checkpoint
+        // of them until a seek.
+        self.on_playback = false;
+        Ok(())
+    }
+
+    /// Runs `update` on the welded `positions`; when it fails (it can only
+    /// be interrupted) the coat is restored to what it was.
+    fn transaction(
+        &mut self,
+        positions: &[f32],
+        progress: &Progress,
+        update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
+    ) -> Result<()> {
+        self.mesh.welded_positions_into(positions, &mut self.frame_positions);
+        let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
+        let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
+        let result = update(self, progress);
+        match result {
+            Ok(()) => {
+                self.pose_changes =
+                    pose_changes(&self.previous_poses, &self.coat.poses, self.dressing.config.pop_threshold);
+                self.export()
+            }
+            Err(_) => {
+                self.previous_poses = older_poses;
+                if let Some((coat, readjusted)) = backup {
+                    self.coat = coat;
+                    self.work.adjuster.set_adjusted(&readjusted);
+                }
+            }
+        }
+        result
+    }
+
+    fn export(&mut self) {
+        let Self { coat, dressing, records, triangles, .. } = self;
+        coat.export(dressing, records, triangles);
+    }
+}
