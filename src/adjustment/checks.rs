@@ -6,11 +6,12 @@
 #[cfg(test)]
 use super::ObstacleFeather;
 use super::height_field::GridExtent;
+use super::obstacle::ObstacleBoxes;
 use super::{AdjustParams, HeightField};
 use crate::body::{Aabb, BodyIndex};
-use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles};
+use crate::feather::{FeatherPose, FeatherShape};
 use crate::geometry::RootFrame;
-use crate::validation::{BoxedTriangles, FeatherBoxes};
+use crate::validation::FeatherBoxes;
 use glam::Vec3;
 
 /// Where an obstacle must reach to matter to [`super::adjust_feather`] for one
@@ -115,23 +116,6 @@ pub(super) struct CheckHints {
     body: Option<u32>,
 }
 
-/// An obstacle as the exact checks meet it: its triangles and its
-/// [`raised_top`] with their boxes. The adjuster makes them once per posed
-/// feather, for every feather it is an obstacle of.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct ObstacleBoxes {
-    triangles: BoxedTriangles,
-    top: BoxedTriangles,
-}
-
-impl ObstacleBoxes {
-    /// The boxes of an obstacle with these triangles and thickness.
-    pub(crate) fn new(triangles: &[[Vec3; 3]], thickness: f32) -> Self {
-        let top = raised_top(triangles, thickness);
-        Self { triangles: BoxedTriangles::new(triangles), top: BoxedTriangles::new(&top) }
-    }
-}
-
 /// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
 /// `all[ids[k]]`, or `all[k]` without `ids`.
 #[derive(Clone, Copy, Debug)]
@@ -197,7 +181,7 @@ fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -
 }
 
 /// Whether the feather (`mine`) meets some obstacle, or with `top` some
-/// obstacle's [`raised_top`], trying `hint` first and setting it to the
+/// obstacle's [`raised_top`](super::obstacle::raised_top), trying `hint` first and setting it to the
 /// one found.
 fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut Option<usize>) -> bool {
     any_index(boxes.len(), hint, |k| {
@@ -206,7 +190,7 @@ fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut
     })
 }
 
-/// `pose_is_clear`, and with `tops` also clear of every [`raised_top`]
+/// `pose_is_clear`, and with `tops` also clear of every [`raised_top`](super::obstacle::raised_top)
 /// (last: most poses that fail, fail before it; testing the tops before
 /// the body took 3 % more instructions in `adjust_feather` on the
 /// Flamingo bench).
@@ -249,21 +233,4 @@ pub(super) fn boxes_clear(
         return false;
     }
     !(tops && meets_obstacle(mine, obstacles, true, &mut hints.top))
-}
-
-/// An obstacle's top: its two triangles raised by its thickness along
-/// their own normals (away from the skin they grow from). A feather clear
-/// of every obstacle's top (tested in [`exact_check`]) and passing
-/// `pose_is_clear` stays out of the slab an obstacle fills, except for
-/// parts that end inside it.
-pub(super) fn raised_top(triangles: &[[Vec3; 3]], thickness: f32) -> FeatherTriangles {
-    let raise = |t: &[Vec3; 3]| {
-        let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero() * thickness;
-        [t[0] + n, t[1] + n, t[2] + n]
-    };
-    let mut top = FeatherTriangles::from_slice(triangles);
-    for (t, raised) in top.iter_mut().zip(triangles.iter().map(raise)) {
-        *t = raised;
-    }
-    top
 }

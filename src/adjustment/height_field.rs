@@ -153,7 +153,7 @@ pub struct HeightField {
     pub(crate) check_part: Vec<[Vec3; 3]>,
     /// Scratch of the exact checks of one feather: its obstacles' boxes
     /// when the caller gives none.
-    pub(crate) boxes: Vec<super::checks::ObstacleBoxes>,
+    pub(crate) boxes: Vec<super::obstacle::ObstacleBoxes>,
     /// The obstacles within reach of one size of the exact pitch sweep.
     pub(crate) sweep_obstacles: Vec<u32>,
     /// The rasterised obstacles' triangles in the root frame (kept for

@@ -4,9 +4,10 @@
 //! ([`super::checks`]), shortened where no pose fits, then a segmented
 //! shaft draped ([`super::drape`]).
 
-use super::checks::{BoxesOf, CheckHints, ObstacleBoxes, exact_check};
+use super::checks::{BoxesOf, CheckHints, exact_check};
 use super::drape::drape;
 use super::height_field::{JUDGE_FRACTION, LocalMap};
+use super::obstacle::ObstacleBoxes;
 use super::pitch_roll::choose_pose;
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
@@ -28,7 +29,7 @@ const REFILL_BELOW: f32 = 0.5;
 /// several degrees, and every later feather lying on it climbs as well.
 /// A pose chosen with the relaxed distance is kept only if the exact check
 /// passes and the feather also stays clear of every obstacle's top (see
-/// [`raised_top`](super::checks::raised_top)), so the thickness is still respected.
+/// [`raised_top`](super::obstacle::raised_top)), so the thickness is still respected.
 ///
 /// Measured with the exact sweep below (coverage, mean pitch): judging
 /// conservatively only, Flamingo 0.864/27.9°, Fox 0.953/30.2°, bird
@@ -195,7 +196,7 @@ const SWEEP_PITCHES: usize = 24;
 const SWEEP_MAX_PITCH: f32 = 0.6;
 
 /// The first pose clear by the exact check alone (and clear of the
-/// obstacles' tops, see [`raised_top`](super::checks::raised_top)), trying the sizes of
+/// obstacles' tops, see [`raised_top`](super::obstacle::raised_top)), trying the sizes of
 /// `SHRINK_STEPS` larger than `smallest` (from full size), and at each
 /// the pitches from the lowest allowed up to `max_pitch` in the steps of
 /// `SWEEP_PITCHES`, unrolled.

@@ -9,7 +9,8 @@
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
 
-use super::checks::{ObstacleBoxes, bounding_sphere};
+use super::checks::bounding_sphere;
+use super::obstacle::ObstacleBoxes;
 use super::{AdjustParams, AdjustSteps, HeightField};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};

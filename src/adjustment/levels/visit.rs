@@ -2,7 +2,8 @@
 //! or adjusted (and settled); what every feather of a level reads, and the
 //! parallel run of one level.
 
-use super::super::checks::{BoxesOf, ObstacleBoxes, ObstacleReach, pose_is_clear_boxed};
+use super::super::checks::{BoxesOf, ObstacleReach, pose_is_clear_boxed};
+use super::super::obstacle::ObstacleBoxes;
 use super::super::settle::{SettlingFeather, settled_pose};
 use super::super::steps::adjust_feather_boxed;
 use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
