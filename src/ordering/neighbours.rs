@@ -382,12 +382,12 @@ impl RowContext<'_> {
         // The sorted unions of the last call are reused for the leaves whose
         // near leaves have not changed (same layout, same leaves).
         let reuse = out.cache_generation == self.generation && out.cache_leaves == (leaves.start, leaves.end);
-        out.next_near.clear();
-        out.next_near_offsets.clear();
-        out.next_near_offsets.push(0);
-        out.next_keys.clear();
-        out.next_key_offsets.clear();
-        out.next_key_offsets.push(0);
+        if !reuse {
+            out.cached.iter_mut().for_each(|leaf| leaf.near.clear());
+        }
+        if out.cached.len() < leaves.len() {
+            out.cached.resize_with(leaves.len(), CachedLeaf::default);
+        }
         for (local, a) in leaves.clone().enumerate() {
             // The leaves within reach of leaf a (a included).
             out.near.clear();
@@ -411,25 +411,18 @@ impl RowContext<'_> {
             // Their roots sorted by index, so that every row comes out sorted.
             // (Sorted as packed (index, place in tree order) words: much
             // cheaper than sorting the points themselves.)
-            let cached = reuse
-                && out.cache_near_offsets.get(local + 1).is_some_and(|&end| {
-                    out.cache_near[out.cache_near_offsets[local] as usize..end as usize] == out.near[..]
-                });
-            let key_start = out.next_keys.len();
-            if cached {
-                let keys = out.cache_key_offsets[local] as usize..out.cache_key_offsets[local + 1] as usize;
-                out.next_keys.extend_from_slice(&out.cache_keys[keys]);
-            } else {
+            let leaf = &mut out.cached[local];
+            if !reuse || leaf.near != out.near {
+                leaf.near.clear();
+                leaf.near.extend_from_slice(&out.near);
+                leaf.keys.clear();
                 for &b in &out.near {
                     let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    out.next_keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
+                    leaf.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
                 }
-                out.next_keys[key_start..].sort_unstable();
+                leaf.keys.sort_unstable();
             }
-            out.next_near.extend_from_slice(&out.near);
-            out.next_near_offsets.push(out.next_near.len() as u32);
-            out.next_key_offsets.push(out.next_keys.len() as u32);
-            out.union.fill(&out.next_keys[key_start..], self.points);
+            out.union.fill(&leaf.keys, self.points);
             let mut guess = f32::INFINITY;
             for t in self.starts[a] as usize..self.starts[a + 1] as usize {
                 let (p, r) = self.points[t];
@@ -437,15 +430,14 @@ impl RowContext<'_> {
                 let frame = &frames[i as usize];
                 let row_start = out.rows.len();
                 out.best.clear();
-                let kept = out.union.scan(p, r, i, &mut out.slots, &mut out.d2);
-                out.rows.extend_from_slice(&out.slots[..kept]);
+                let kept = out.union.scan(p, r, i, &mut out.rows, &mut out.d2);
                 if k > 0 {
                     // First only the candidates within `guess` (twice the
                     // k-th distance of the leaf's previous root, squared
                     // ×4): when k of them are accepted, no farther
                     // candidate can rank among the k best, so the others
                     // are skipped; otherwise every candidate is ranked.
-                    let (slots, d2s) = (&out.slots[..kept], &out.d2[..kept]);
+                    let (slots, d2s) = (&out.rows[row_start..], &out.d2[..kept]);
                     let rank = |best: &mut Vec<(f32, u32)>, bound: f32| {
                         for (&j, &d2) in slots.iter().zip(d2s) {
                             if d2 <= bound
@@ -485,10 +477,6 @@ impl RowContext<'_> {
                 out.knn_lens.push(out.best.len() as u32);
             }
         }
-        std::mem::swap(&mut out.cache_near, &mut out.next_near);
-        std::mem::swap(&mut out.cache_near_offsets, &mut out.next_near_offsets);
-        std::mem::swap(&mut out.cache_keys, &mut out.next_keys);
-        std::mem::swap(&mut out.cache_key_offsets, &mut out.next_key_offsets);
         out.cache_generation = self.generation;
         out.cache_leaves = (leaves.start, leaves.end);
     }
@@ -531,24 +519,24 @@ struct Chunk {
     knn_lens: Vec<u32>,
     near: Vec<u32>,
     union: Union,
-    slots: Vec<u32>,
     d2: Vec<f32>,
     stack: Vec<u32>,
     best: Vec<(f32, u32)>,
     /// Places in `roots` whose k nearest wait for a current tree.
     deferred: Vec<u32>,
     /// Per leaf of the last call (`cache_leaves` of layout
-    /// `cache_generation`): its near leaves and its roots' sorted keys, as CSR.
+    /// `cache_generation`): its near leaves and their roots' sorted keys.
     cache_generation: u64,
     cache_leaves: (usize, usize),
-    cache_near: Vec<u32>,
-    cache_near_offsets: Vec<u32>,
-    cache_keys: Vec<u64>,
-    cache_key_offsets: Vec<u32>,
-    next_near: Vec<u32>,
-    next_near_offsets: Vec<u32>,
-    next_keys: Vec<u64>,
-    next_key_offsets: Vec<u32>,
+    cached: Vec<CachedLeaf>,
+}
+
+/// A leaf's near leaves and their roots as sorted `(index << 32 | place in
+/// layout order)` keys.
+#[derive(Debug, Default)]
+struct CachedLeaf {
+    near: Vec<u32>,
+    keys: Vec<u64>,
 }
 
 /// The roots of a leaf's near leaves, sorted by index, as columns (so that
@@ -592,21 +580,20 @@ impl Union {
         self.id.resize(padded, u32::MAX);
     }
 
-    /// Writes to the front of `slots` every root `j ≠ i` with
-    /// `|r_j − p|² ≤ (r + reach_j)²`, in order, and its squared distance to
-    /// the front of `d2s`; returns how many (both only ever grow). The
+    /// Appends to `row` every root `j ≠ i` with `|r_j − p|² ≤ (r + reach_j)²`,
+    /// in order, and writes its squared distance to the front of `d2s`
+    /// (which only ever grows); returns how many. The
     /// distance is computed as `(r_j − p).length_squared()` is, operation
     /// for operation (lane by lane in `f32`, no fused multiply-add), so the
     /// test is bitwise the one of a radius query.
     #[inline]
-    fn scan(&self, p: glam::Vec3, r: f32, i: u32, slots: &mut Vec<u32>, d2s: &mut Vec<f32>) -> usize {
-        if slots.len() < self.id.len() {
-            slots.resize(self.id.len(), 0);
-        }
+    fn scan(&self, p: glam::Vec3, r: f32, i: u32, row: &mut Vec<u32>, d2s: &mut Vec<f32>) -> usize {
+        row.reserve(self.id.len());
         if d2s.len() < self.id.len() {
             d2s.resize(self.id.len(), 0.0);
         }
-        let (slots, distances) = (&mut slots[..], &mut d2s[..]);
+        let base = row.len();
+        let (slots, distances) = (&mut row.spare_capacity_mut()[..self.id.len()], &mut d2s[..]);
         let mut kept = 0;
         let blocks = self
             .x
@@ -617,17 +604,20 @@ impl Union {
             .zip(self.id.chunks_exact(LANES));
         let mut d2 = [0.0f32; LANES];
         for ((((x, y), z), reach), id) in blocks {
-            let mut mask = within_mask(x, y, z, reach, p, r, &mut d2);
-            // Branch-free: each lane within reach is written, and the cursor
-            // moves past it unless it is the root itself.
-            while mask != 0 {
-                let l = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                slots[kept] = id[l];
+            let mask = within_mask(x, y, z, reach, p, r, &mut d2);
+            // Branch-free: every lane is written, and the cursor moves past
+            // those within reach other than the root itself (`kept` never
+            // passes the lane's own place, so the writes stay in bounds).
+            for l in 0..LANES {
+                slots[kept] = std::mem::MaybeUninit::new(id[l]);
                 distances[kept] = d2[l];
-                kept += usize::from(id[l] != i);
+                kept += ((mask >> l) & 1) as usize & usize::from(id[l] != i);
             }
         }
+        // SAFETY: the first `kept` spare slots were written (each lane is
+        // written before the cursor moves past it), within the capacity
+        // reserved above.
+        unsafe { row.set_len(base + kept) };
         kept
     }
 }
