@@ -14,6 +14,12 @@
 //! leaves are shared out among the threads; each root's row and k nearest
 //! depend on the positions alone, so nothing depends on the thread count.
 //!
+//! From frame to frame the leaves (which roots go together) are kept while
+//! their boxes at the current pose stay compact, and so is each leaf's
+//! sorted list of candidate roots while its near leaves stay the same: the
+//! roots do not move on the body, so most of a frame's work is the distance
+//! tests, run several lanes at a time. None of this changes a row.
+//!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
 //! (`n_i·n_j < min_normal_dot`) are never neighbours or pairs of each other
@@ -26,6 +32,11 @@ use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
 use crate::snapshot::{Reader, Writer};
 use rayon::prelude::*;
+
+/// The leaf layout is kept while the sum of the leaves' box diagonals stays
+/// within this factor of its value when the layout was made: larger boxes
+/// only mean more candidates to test, never different rows.
+const LAYOUT_SLACK: f32 = 1.2;
 
 /// Parameters of the neighbourhood search.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,8 +70,20 @@ pub struct Neighbourhoods {
     bucket_offsets: Vec<u32>,
     bucket_items: Vec<u32>,
     fill_cursor: Vec<u32>,
+    /// The leaf layout: root ids in tree order and where each leaf starts.
+    /// Kept from frame to frame while the leaves stay compact (see
+    /// [`LAYOUT_SLACK`]); the rows do not depend on it.
     leaf_ids: Vec<u32>,
     leaf_starts: Vec<u32>,
+    /// Bumped at every new layout (0: none yet).
+    layout_generation: u64,
+    /// Root count of the layout.
+    layout_roots: usize,
+    /// Sum of the leaves' box diagonals when the layout was made.
+    layout_spread: f32,
+    /// Whether `tree` holds the current positions (the layout's tree is
+    /// stale once the roots move; the k nearest's fallback then builds one).
+    tree_current: bool,
     points: Vec<(glam::Vec3, f32)>,
     cells: Vec<Cell>,
     nodes: Vec<Node>,
@@ -98,9 +121,42 @@ impl Neighbourhoods {
     pub fn rebuild(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
         assert!(u32::try_from(frames.len()).is_ok(), "too many roots for u32 indices");
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
-        self.tree.rebuild(frames.iter().map(|f| f.position));
+        self.tree_current = false;
         self.rebuild_rows(frames, reach, params);
         self.rebuild_pairs(frames.len());
+    }
+
+    /// A new leaf layout from a k-d tree over the current positions.
+    fn new_layout(&mut self, frames: &[RootFrame]) {
+        self.tree.rebuild(frames.iter().map(|f| f.position));
+        self.tree_current = true;
+        self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
+        self.layout_generation += 1;
+        self.layout_roots = frames.len();
+    }
+
+    /// The roots in layout order with their reach, and each leaf's box.
+    fn gather_cells(&mut self, frames: &[RootFrame], reach: &[f32]) {
+        let ids = &self.leaf_ids;
+        let with_reach = !reach.is_empty();
+        self.points.clear();
+        self.points.extend(ids.iter().map(|&i| {
+            (frames[i as usize].position, if with_reach { sanitized_reach(reach[i as usize]) } else { 0.0 })
+        }));
+        self.cells.clear();
+        for w in self.leaf_starts.windows(2) {
+            let points = &self.points[w[0] as usize..w[1] as usize];
+            let (lo, hi, reach) =
+                points.iter().fold((glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY, 0.0f32), |(lo, hi, r), &(p, q)| {
+                    (lo.min(p), hi.max(p), r.max(q))
+                });
+            self.cells.push(Cell { lo, hi, reach });
+        }
+    }
+
+    /// Sum of the leaves' box diagonals.
+    fn spread(&self) -> f32 {
+        self.cells.iter().map(|c| (c.hi - c.lo).length()).sum()
     }
 
     /// Number of roots of the last rebuild.
@@ -207,22 +263,21 @@ impl Neighbourhoods {
     /// rows are those of the tree alone.
     fn rebuild_rows(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
         let n = frames.len();
-        self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
-        let ids = &self.leaf_ids;
-        let with_reach = !reach.is_empty();
-        self.points.clear();
-        self.points.extend(ids.iter().map(|&i| {
-            (frames[i as usize].position, if with_reach { sanitized_reach(reach[i as usize]) } else { 0.0 })
-        }));
-        self.cells.clear();
-        for w in self.leaf_starts.windows(2) {
-            let points = &self.points[w[0] as usize..w[1] as usize];
-            let (lo, hi, reach) =
-                points.iter().fold((glam::Vec3::INFINITY, glam::Vec3::NEG_INFINITY, 0.0f32), |(lo, hi, r), &(p, q)| {
-                    (lo.min(p), hi.max(p), r.max(q))
-                });
-            self.cells.push(Cell { lo, hi, reach });
+        let fresh = self.layout_generation == 0 || self.layout_roots != n;
+        if fresh {
+            self.new_layout(frames);
         }
+        self.gather_cells(frames, reach);
+        if fresh {
+            self.layout_spread = self.spread();
+        } else if self.spread().partial_cmp(&(LAYOUT_SLACK * self.layout_spread)).is_none_or(|o| o.is_gt()) {
+            // The leaves have spread out (or a position is not finite):
+            // lay them out again at this pose.
+            self.new_layout(frames);
+            self.gather_cells(frames, reach);
+            self.layout_spread = self.spread();
+        }
+        let ids = &self.leaf_ids;
         self.nodes.clear();
         if !self.cells.is_empty() {
             build_nodes(&self.cells, 0, self.cells.len() as u32, &mut self.nodes);
@@ -245,13 +300,23 @@ impl Neighbourhoods {
             points: &self.points,
             cells: &self.cells,
             nodes: &self.nodes,
-            tree: &self.tree,
+            tree: self.tree_current.then_some(&self.tree),
+            generation: self.layout_generation,
         };
         self.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, chunk)| {
             let first = (c * per_chunk).min(leaves);
             let last = ((c + 1) * per_chunk).min(leaves);
             ctx.fill(first..last, chunk);
         });
+        // The k nearest the rows could not settle, with a tree over the
+        // current positions (the layout's tree is stale).
+        if self.chunks[..chunks].iter().any(|c| !c.deferred.is_empty()) {
+            self.tree.rebuild(frames.iter().map(|f| f.position));
+            self.tree_current = true;
+            for chunk in self.chunks[..chunks].iter_mut().filter(|c| !c.deferred.is_empty()) {
+                chunk.settle_deferred(frames, params, &self.tree);
+            }
+        }
         // Gather the rows by root index.
         let chunks = &self.chunks[..chunks];
         for (offsets, lens) in [(&mut self.obstacle_offsets, 0usize), (&mut self.knn_offsets, 1)] {
@@ -297,7 +362,10 @@ struct RowContext<'a> {
     points: &'a [(glam::Vec3, f32)],
     cells: &'a [Cell],
     nodes: &'a [Node],
-    tree: &'a KdTree,
+    /// A tree over the current positions, when there is one.
+    tree: Option<&'a KdTree>,
+    /// The layout's generation (a chunk's cached unions are valid for it).
+    generation: u64,
 }
 
 impl RowContext<'_> {
@@ -309,8 +377,18 @@ impl RowContext<'_> {
         out.row_lens.clear();
         out.knn.clear();
         out.knn_lens.clear();
+        out.deferred.clear();
         let (frames, params, k) = (self.frames, self.params, self.params.k);
-        for a in leaves {
+        // The sorted unions of the last call are reused for the leaves whose
+        // near leaves have not changed (same layout, same leaves).
+        let reuse = out.cache_generation == self.generation && out.cache_leaves == (leaves.start, leaves.end);
+        if !reuse {
+            out.cached.iter_mut().for_each(|leaf| leaf.near.clear());
+        }
+        if out.cached.len() < leaves.len() {
+            out.cached.resize_with(leaves.len(), CachedLeaf::default);
+        }
+        for (local, a) in leaves.clone().enumerate() {
             // The leaves within reach of leaf a (a included).
             out.near.clear();
             if !self.reach.is_empty() {
@@ -333,48 +411,65 @@ impl RowContext<'_> {
             // Their roots sorted by index, so that every row comes out sorted.
             // (Sorted as packed (index, place in tree order) words: much
             // cheaper than sorting the points themselves.)
-            out.keys.clear();
-            for &b in &out.near {
-                let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                out.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
+            let leaf = &mut out.cached[local];
+            if !reuse || leaf.near != out.near {
+                leaf.near.clear();
+                leaf.near.extend_from_slice(&out.near);
+                leaf.keys.clear();
+                for &b in &out.near {
+                    let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
+                    leaf.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
+                }
+                leaf.keys.sort_unstable();
             }
-            out.keys.sort_unstable();
-            out.union.clear();
-            out.union.extend(out.keys.iter().map(|&key| ((key >> 32) as u32, self.points[key as u32 as usize])));
+            out.union.fill(&leaf.keys, self.points);
+            let mut guess = f32::INFINITY;
             for t in self.starts[a] as usize..self.starts[a + 1] as usize {
                 let (p, r) = self.points[t];
                 let i = self.ids[t];
                 let frame = &frames[i as usize];
                 let row_start = out.rows.len();
                 out.best.clear();
-                // Branch-free: every candidate is written, and the cursor
-                // moves past those within reach.
-                out.rows.resize(row_start + out.union.len(), 0);
-                out.d2.resize(out.union.len(), 0.0);
-                let (slots, d2s) = (&mut out.rows[row_start..], &mut out.d2[..]);
-                let mut kept = 0;
-                for &(j, (q, s)) in &out.union {
-                    let limit = r + s;
-                    let d2 = (q - p).length_squared();
-                    slots[kept] = j;
-                    d2s[kept] = d2;
-                    kept += usize::from((d2 <= limit * limit) & (j != i));
-                }
-                out.rows.truncate(row_start + kept);
+                let kept = out.union.scan(p, r, i, &mut out.rows, &mut out.d2);
                 if k > 0 {
-                    for (&j, &d2) in out.rows[row_start..].iter().zip(&out.d2[..kept]) {
-                        if ranks_among_best(&out.best, k, d2, j)
-                            && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
-                        {
-                            insert_candidate(&mut out.best, k, d2, j);
+                    // First only the candidates within `guess` (twice the
+                    // k-th distance of the leaf's previous root, squared
+                    // ×4): when k of them are accepted, no farther
+                    // candidate can rank among the k best, so the others
+                    // are skipped; otherwise every candidate is ranked.
+                    let (slots, d2s) = (&out.rows[row_start..], &out.d2[..kept]);
+                    let rank = |best: &mut Vec<(f32, u32)>, bound: f32| {
+                        for (&j, &d2) in slots.iter().zip(d2s) {
+                            if d2 <= bound
+                                && ranks_among_best(best, k, d2, j)
+                                && normals_agree(frame, &frames[j as usize], params.min_normal_dot)
+                            {
+                                insert_candidate(best, k, d2, j);
+                            }
                         }
+                    };
+                    rank(&mut out.best, guess);
+                    if out.best.len() < k {
+                        out.best.clear();
+                        rank(&mut out.best, f32::INFINITY);
                     }
+                    guess = if out.best.len() == k { 4.0 * out.best[k - 1].0 } else { f32::INFINITY };
                 }
                 let sure = self.reach.get(i as usize).map_or(0.0, |&r| sanitized_reach(r) + self.min_reach);
                 let beyond = |d2: f32| d2.partial_cmp(&(sure * sure)).is_none_or(|o| o.is_gt());
                 if k > 0 && (out.best.len() < k || out.best.last().is_some_and(|b| beyond(b.0))) {
-                    let accept = |j: u32| j != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
-                    self.tree.nearest(p, k, &accept, &mut out.best);
+                    match self.tree {
+                        Some(tree) => {
+                            let accept =
+                                |j: u32| j != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+                            tree.nearest(p, k, &accept, &mut out.best);
+                        }
+                        // Settled after the pass, with a current tree.
+                        None => {
+                            out.deferred.push(out.roots.len() as u32);
+                            out.best.clear();
+                        }
+                    }
                 }
                 out.roots.push(i);
                 out.row_lens.push((out.rows.len() - row_start) as u32);
@@ -382,6 +477,35 @@ impl RowContext<'_> {
                 out.knn_lens.push(out.best.len() as u32);
             }
         }
+        out.cache_generation = self.generation;
+        out.cache_leaves = (leaves.start, leaves.end);
+    }
+}
+
+impl Chunk {
+    /// The k nearest of the roots in `deferred` from `tree` (over the
+    /// current positions), spliced into the chunk's lists.
+    fn settle_deferred(&mut self, frames: &[RootFrame], params: &NeighbourParams, tree: &KdTree) {
+        let (mut knn, mut lens) = (Vec::with_capacity(self.knn.len()), Vec::with_capacity(self.knn_lens.len()));
+        let (mut at, mut next) = (0usize, 0usize);
+        for (r, &i) in self.roots.iter().enumerate() {
+            let len = self.knn_lens[r] as usize;
+            if self.deferred.get(next) == Some(&(r as u32)) {
+                next += 1;
+                let frame = &frames[i as usize];
+                let accept = |j: u32| j != i && normals_agree(frame, &frames[j as usize], params.min_normal_dot);
+                tree.nearest(frame.position, params.k, &accept, &mut self.best);
+                knn.extend(self.best.iter().map(|&(_, j)| j));
+                lens.push(self.best.len() as u32);
+            } else {
+                knn.extend_from_slice(&self.knn[at..at + len]);
+                lens.push(len as u32);
+            }
+            at += len;
+        }
+        self.knn = knn;
+        self.knn_lens = lens;
+        self.deferred.clear();
     }
 }
 
@@ -394,11 +518,149 @@ struct Chunk {
     knn: Vec<u32>,
     knn_lens: Vec<u32>,
     near: Vec<u32>,
-    keys: Vec<u64>,
-    union: Vec<(u32, (glam::Vec3, f32))>,
+    union: Union,
     d2: Vec<f32>,
     stack: Vec<u32>,
     best: Vec<(f32, u32)>,
+    /// Places in `roots` whose k nearest wait for a current tree.
+    deferred: Vec<u32>,
+    /// Per leaf of the last call (`cache_leaves` of layout
+    /// `cache_generation`): its near leaves and their roots' sorted keys.
+    cache_generation: u64,
+    cache_leaves: (usize, usize),
+    cached: Vec<CachedLeaf>,
+}
+
+/// A leaf's near leaves and their roots as sorted `(index << 32 | place in
+/// layout order)` keys.
+#[derive(Debug, Default)]
+struct CachedLeaf {
+    near: Vec<u32>,
+    keys: Vec<u64>,
+}
+
+/// The roots of a leaf's near leaves, sorted by index, as columns (so that
+/// the distance tests run several lanes at a time), padded to whole blocks
+/// with entries that are never within reach (NaN coordinates).
+#[derive(Debug, Default)]
+struct Union {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    reach: Vec<f32>,
+    id: Vec<u32>,
+}
+
+/// Entries a block of [`Union::scan`] tests at once.
+const LANES: usize = 8;
+
+impl Union {
+    /// The roots of `keys` (index << 32 | place in layout order) with their
+    /// position and reach from `points`.
+    fn fill(&mut self, keys: &[u64], points: &[(glam::Vec3, f32)]) {
+        let padded = keys.len().next_multiple_of(LANES);
+        for column in [&mut self.x, &mut self.y, &mut self.z, &mut self.reach] {
+            column.clear();
+            column.reserve(padded);
+        }
+        self.id.clear();
+        self.id.reserve(padded);
+        for &key in keys {
+            let (p, r) = points[key as u32 as usize];
+            self.x.push(p.x);
+            self.y.push(p.y);
+            self.z.push(p.z);
+            self.reach.push(r);
+            self.id.push((key >> 32) as u32);
+        }
+        self.x.resize(padded, f32::NAN);
+        self.y.resize(padded, f32::NAN);
+        self.z.resize(padded, f32::NAN);
+        self.reach.resize(padded, 0.0);
+        self.id.resize(padded, u32::MAX);
+    }
+
+    /// Appends to `row` every root `j ≠ i` with `|r_j − p|² ≤ (r + reach_j)²`,
+    /// in order, and writes its squared distance to the front of `d2s`
+    /// (which only ever grows); returns how many. The
+    /// distance is computed as `(r_j − p).length_squared()` is, operation
+    /// for operation (lane by lane in `f32`, no fused multiply-add), so the
+    /// test is bitwise the one of a radius query.
+    #[inline]
+    fn scan(&self, p: glam::Vec3, r: f32, i: u32, row: &mut Vec<u32>, d2s: &mut Vec<f32>) -> usize {
+        row.reserve(self.id.len());
+        if d2s.len() < self.id.len() {
+            d2s.resize(self.id.len(), 0.0);
+        }
+        let base = row.len();
+        let (slots, distances) = (&mut row.spare_capacity_mut()[..self.id.len()], &mut d2s[..]);
+        let mut kept = 0;
+        let blocks = self
+            .x
+            .chunks_exact(LANES)
+            .zip(self.y.chunks_exact(LANES))
+            .zip(self.z.chunks_exact(LANES))
+            .zip(self.reach.chunks_exact(LANES))
+            .zip(self.id.chunks_exact(LANES));
+        let mut d2 = [0.0f32; LANES];
+        for ((((x, y), z), reach), id) in blocks {
+            let mask = within_mask(x, y, z, reach, p, r, &mut d2);
+            // Branch-free: every lane is written, and the cursor moves past
+            // those within reach other than the root itself (`kept` never
+            // passes the lane's own place, so the writes stay in bounds).
+            for l in 0..LANES {
+                slots[kept] = std::mem::MaybeUninit::new(id[l]);
+                distances[kept] = d2[l];
+                kept += ((mask >> l) & 1) as usize & usize::from(id[l] != i);
+            }
+        }
+        // SAFETY: the first `kept` spare slots were written (each lane is
+        // written before the cursor moves past it), within the capacity
+        // reserved above.
+        unsafe { row.set_len(base + kept) };
+        kept
+    }
+}
+
+/// For one block of [`LANES`] entries: writes `|r_j − p|²` to `d2` and
+/// returns the mask of the lanes with `d2 ≤ (r + reach_j)²` (NaN never
+/// within).
+#[inline]
+fn within_mask(x: &[f32], y: &[f32], z: &[f32], reach: &[f32], p: glam::Vec3, r: f32, d2: &mut [f32; LANES]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        assert!(x.len() == LANES && y.len() == LANES && z.len() == LANES && reach.len() == LANES);
+        // SAFETY: SSE2 is part of the x86_64 baseline; every load and store
+        // reads or writes 4 lanes inside a slice of LANES = 8 (checked above).
+        unsafe {
+            let (px, py, pz, pr) = (_mm_set1_ps(p.x), _mm_set1_ps(p.y), _mm_set1_ps(p.z), _mm_set1_ps(r));
+            let mut mask = 0u32;
+            for half in 0..LANES / 4 {
+                let at = half * 4;
+                let dx = _mm_sub_ps(_mm_loadu_ps(x.as_ptr().add(at)), px);
+                let dy = _mm_sub_ps(_mm_loadu_ps(y.as_ptr().add(at)), py);
+                let dz = _mm_sub_ps(_mm_loadu_ps(z.as_ptr().add(at)), pz);
+                let dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+                let limit = _mm_add_ps(pr, _mm_loadu_ps(reach.as_ptr().add(at)));
+                let within = _mm_cmple_ps(dd, _mm_mul_ps(limit, limit));
+                _mm_storeu_ps(d2.as_mut_ptr().add(at), dd);
+                mask |= (_mm_movemask_ps(within) as u32) << at;
+            }
+            mask
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let mut mask = 0u32;
+        for l in 0..LANES {
+            let (dx, dy, dz) = (x[l] - p.x, y[l] - p.y, z[l] - p.z);
+            d2[l] = (dx * dx) + (dy * dy) + (dz * dz);
+            let limit = r + reach[l];
+            mask |= u32::from(d2[l] <= limit * limit) << l;
+        }
+        mask
+    }
 }
 
 /// A box of the hierarchy over the leaves: a leaf (`children == u32::MAX`)
@@ -734,8 +996,13 @@ mod tests {
             (0..48 * 24).map(|k| if k % 97 == 5 { 0.0 } else { 1.2 + (k % 7) as f32 * 0.2 }).collect();
         let pools: Vec<rayon::ThreadPool> =
             [1, 2, 3].iter().map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap()).collect();
+        // One `Neighbourhoods` through every pose and thread count: its leaf
+        // layout is kept while the leaves stay compact, and then the roots
+        // of reach 0 (whose k nearest the rows cannot settle) wait for a
+        // tree over the current positions.
         let mut nb = Neighbourhoods::new();
         let mut fold_pairs = 0;
+        let mut rebuilds = 0;
         for (step, t) in [0.0f32, 0.3, 0.6, 0.85, 0.97, 1.0].into_iter().enumerate() {
             let frames = folding_strip(t, &mut crate::rng::Rng::new(5));
             let (rows, knn) = exhaustive(&frames, &reach, &params);
@@ -746,6 +1013,7 @@ mod tests {
             let mut seen = Vec::new();
             for pool in &pools {
                 pool.install(|| nb.rebuild(&frames, &reach, &params));
+                rebuilds += 1;
                 for i in 0..frames.len() {
                     assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, pose {step}");
                     assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, pose {step}");
@@ -755,6 +1023,21 @@ mod tests {
             assert!(seen.windows(2).all(|w| w[0] == w[1]), "pose {step} depends on the thread count");
         }
         assert!(fold_pairs > 100, "the folded pose must bring far roots together ({fold_pairs} pairs)");
+        assert_eq!(nb.layout_generation, 1, "the fold keeps the leaves compact: one layout throughout");
+        assert!(rebuilds > 2);
+        // Stretched to 1.5 times its size, the strip's leaves spread out and
+        // are laid out again; the rows still match.
+        let stretched: Vec<RootFrame> = folding_strip(0.5, &mut crate::rng::Rng::new(5))
+            .iter()
+            .map(|f| RootFrame { position: f.position * 1.5, ..*f })
+            .collect();
+        let (rows, knn) = exhaustive(&stretched, &reach, &params);
+        nb.rebuild(&stretched, &reach, &params);
+        assert_eq!(nb.layout_generation, 2, "stretched leaves must be laid out again");
+        for i in 0..stretched.len() {
+            assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, stretched");
+            assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, stretched");
+        }
     }
 
     #[test]

@@ -114,7 +114,10 @@ fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cel
 pub(crate) struct StaticGrid {
     origin: Vec3,
     inv_cell: f32,
-    ranges: CellMap<(u32, u32)>,
+    /// Cell → its id, an index into `spans`.
+    cells: CellMap<u32>,
+    /// Per cell id, in slot order: the cell's slots `a..b`.
+    spans: Vec<(u32, u32)>,
     /// Sorted slot → the caller's index.
     order: Vec<u32>,
     /// Positions in slot order.
@@ -140,7 +143,8 @@ impl StaticGrid {
         let mut keyed: Vec<(u64, u32)> =
             positions.iter().enumerate().map(|(i, &p)| (cell_of(p - origin, inv_cell).packed(), i as u32)).collect();
         keyed.sort_by_key(|&(key, _)| key);
-        let mut ranges = CellMap::default();
+        let mut cells = CellMap::default();
+        let mut spans = Vec::new();
         let mut start = 0;
         while start < keyed.len() {
             let mut end = start;
@@ -148,12 +152,52 @@ impl StaticGrid {
                 end += 1;
             }
             let cell = cell_of(positions[keyed[start].1 as usize] - origin, inv_cell);
-            ranges.insert(cell, (start as u32, end as u32));
+            cells.insert(cell, spans.len() as u32);
+            spans.push((start as u32, end as u32));
             start = end;
         }
         let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
         let positions = order.iter().map(|&i| positions[i as usize]).collect();
-        Self { origin, inv_cell, ranges, order, positions }
+        Self { origin, inv_cell, cells, spans, order, positions }
+    }
+
+    /// Number of occupied cells (cell ids are `0..cell_count()`).
+    pub(crate) fn cell_count(&self) -> usize {
+        self.spans.len()
+    }
+
+    /// Per slot, the id of its cell.
+    pub(crate) fn slot_cells(&self) -> Vec<u32> {
+        let mut out = vec![0u32; self.positions.len()];
+        for (id, &(a, b)) in self.spans.iter().enumerate() {
+            out[a as usize..b as usize].fill(id as u32);
+        }
+        out
+    }
+
+    /// Calls `f(cell id, first slot, positions)` for every occupied cell
+    /// that meets the ball of `radius` around `center` (every occupied cell
+    /// when the radius is huge against the cell), in slot order; the caller
+    /// tests the distances. Lets a caller skip a cell it knows to be empty
+    /// of what it looks for.
+    #[inline]
+    pub(crate) fn for_each_cell_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, u32, &[Vec3])) {
+        // A radius huge against the cell (spacing multipliers far apart)
+        // would walk more cells than there are points: visit the occupied
+        // cells instead. Slots are sorted by cell in the walk's (x, y, z)
+        // order, so the calls come in the same order either way.
+        if box_cell_count(center - self.origin, radius, self.inv_cell) > self.positions.len() as f64 {
+            for (id, &(a, b)) in self.spans.iter().enumerate() {
+                f(id as u32, a, &self.positions[a as usize..b as usize]);
+            }
+            return;
+        }
+        for_each_cell(center - self.origin, radius, self.inv_cell, |cell| {
+            if let Some(&id) = self.cells.get(&cell) {
+                let (a, b) = self.spans[id as usize];
+                f(id, a, &self.positions[a as usize..b as usize]);
+            }
+        });
     }
 
     /// Sorted slot → the caller's index of the point stored there.
@@ -166,26 +210,11 @@ impl StaticGrid {
     #[inline]
     pub(crate) fn for_each_slot_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, f32)) {
         let r2 = radius * radius;
-        // A radius huge against the cell (spacing multipliers far apart)
-        // would walk more cells than there are points: scan the points
-        // instead. Slots are sorted by cell in the walk's (x, y, z) order,
-        // so the calls come in the same order either way.
-        if box_cell_count(center - self.origin, radius, self.inv_cell) > self.positions.len() as f64 {
-            for (slot, p) in self.positions.iter().enumerate() {
+        self.for_each_cell_within(center, radius, |_, first, points| {
+            for (slot, p) in (first..).zip(points) {
                 let d2 = (*p - center).length_squared();
                 if d2 <= r2 {
-                    f(slot as u32, d2);
-                }
-            }
-            return;
-        }
-        for_each_cell(center - self.origin, radius, self.inv_cell, |cell| {
-            if let Some(&(a, b)) = self.ranges.get(&cell) {
-                for (slot, p) in (a..b).zip(&self.positions[a as usize..b as usize]) {
-                    let d2 = (*p - center).length_squared();
-                    if d2 <= r2 {
-                        f(slot, d2);
-                    }
+                    f(slot, d2);
                 }
             }
         });

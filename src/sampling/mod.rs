@@ -5,7 +5,9 @@
 //! The global spacing `d` is `config.spacing` when set; otherwise it is
 //! searched for so that the root count meets `config.target_feathers`
 //! (2000 when that is 0 too): roots ∝ 1/d², so a few sampling passes with a
-//! secant step on `log n` against `log d` land within a few percent.
+//! secant step on `log n` against `log d` land within a few percent. The
+//! first guess is fitted to the shared models and lands within the
+//! tolerance in most cases, so most searches run one pass.
 //!
 //! The pool holds `config.pool_factor` × the expected root count, taken as
 //! `∫ dA / d(p)²` (one root per `d²`; the guided sampler's lattice packs
@@ -40,10 +42,23 @@ use std::time::Instant;
 /// Root count aimed at when neither a spacing nor a target is given.
 pub(crate) const DEFAULT_TARGET_FEATHERS: usize = 2000;
 
-/// Roots per `d²` of (density-weighted) area each sampler typically packs;
-/// only the first guess of the spacing search uses them.
+/// Roots per `d²` of (density-weighted) area the guided sampler's lattice
+/// would pack with no gaps: the nominal feather length (`field.rs`) and the
+/// refusal of a `config.spacing` that plants too many roots use them.
 pub(crate) const GUIDED_PACKING: f64 = 0.75;
 const RANDOM_PACKING: f64 = 0.67;
+
+/// The spacing search's first guess: roots per `d²` of effective area each
+/// sampler plants on a large count (`n → ∞`), and `EDGE_LOSS`: at `n` roots
+/// a share `EDGE_LOSS/√n` of that is lost along the feathered region's
+/// edges. Fitted to the first passes of the built-in model, the Flamingo,
+/// the Fox and the bird at 2 000 and 10 000 roots (BENCHMARKS.md, "Issue
+/// #20, second round"): the guided sampler's counts per model lie within
+/// about ±4 % of this, the random sampler's within about ±5 %, so most
+/// requests need one pass.
+const GUIDED_FIRST_GUESS: f64 = 0.696;
+const RANDOM_FIRST_GUESS: f64 = 0.636;
+const EDGE_LOSS: f64 = 3.1;
 
 /// Spacing search: at most this many sampling passes, stopping early once
 /// the count is within this relative error of the target.
@@ -68,6 +83,10 @@ pub struct Sampling {
     /// Wall time of the sampling itself (every pass of a spacing search;
     /// not the metrics).
     pub seconds: f64,
+    /// Sampling passes run: 1 with a given spacing, 1 to 6 in a search.
+    pub passes: u32,
+    /// Roots the first pass planted (the search's first guess).
+    pub first_pass_roots: usize,
 }
 
 /// Plants roots on the welded rest mesh with the sampler, spacing or target
@@ -101,14 +120,16 @@ pub fn sample_roots_with_progress(
     let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
     check_spacing_estimate(density.effective_area(), config)?;
+    let mut passes = Passes::default();
     let (spacing, pool, samples) = if density.effective_area().is_nan() || density.effective_area() <= 0.0 {
         let nominal = (surface.rest_area().max(f64::MIN_POSITIVE) / target as f64).sqrt() as f32;
         (if config.spacing > 0.0 { config.spacing } else { nominal }, None, Vec::new())
     } else if config.spacing > 0.0 {
         let (pool, samples) = sampling_pass(&density, surface, positions, fields, config, config.spacing, progress);
+        passes.record(samples.len());
         (config.spacing, Some(pool), samples)
     } else {
-        search_spacing(&density, surface, positions, fields, config, target, progress)
+        search_spacing(&density, surface, positions, fields, config, target, progress, &mut passes)
     };
     // A pass cut short by the progress has set its stop flag.
     progress.check(Phase::Sampling, 0.9)?;
@@ -119,7 +140,23 @@ pub fn sample_roots_with_progress(
     let seconds = start.elapsed().as_secs_f64();
     progress.check(Phase::Sampling, 0.95)?;
     let metrics = sampling_metrics(surface, positions, fields, &buried, &roots, spacing, config.theta);
-    Ok(Sampling { roots, spacing, metrics, seconds })
+    Ok(Sampling { roots, spacing, metrics, seconds, passes: passes.count, first_pass_roots: passes.first_roots })
+}
+
+/// How many sampling passes ran, and the first one's root count.
+#[derive(Default)]
+struct Passes {
+    count: u32,
+    first_roots: usize,
+}
+
+impl Passes {
+    fn record(&mut self, roots: usize) {
+        if self.count == 0 {
+            self.first_roots = roots;
+        }
+        self.count += 1;
+    }
 }
 
 /// Refuses a `config.spacing` whose estimated root count over
@@ -186,6 +223,7 @@ fn sampling_pass(
 
 /// Finds the spacing whose root count is nearest `target` (secant steps on
 /// `log n` against `log d`, slope −2 to start) and returns that pass.
+#[allow(clippy::too_many_arguments)]
 fn search_spacing(
     density: &DensityField<'_>,
     surface: &Surface,
@@ -194,12 +232,9 @@ fn search_spacing(
     config: &Config,
     target: usize,
     progress: &Progress,
+    passes: &mut Passes,
 ) -> (f32, Option<SortedPool>, Vec<u32>) {
-    let packing = match config.sampler {
-        SamplerKind::Guided => GUIDED_PACKING,
-        SamplerKind::Random => RANDOM_PACKING,
-    };
-    let mut d = (density.effective_area() / (packing * target as f64)).sqrt() as f32;
+    let mut d = first_guess(density.effective_area(), config.sampler, target);
     let mut best: Option<(f64, f32, SortedPool, Vec<u32>)> = None;
     let mut previous: Option<(f64, f64)> = None;
     for _ in 0..SEARCH_PASSES {
@@ -208,6 +243,7 @@ fn search_spacing(
             return (d, Some(pool), samples);
         }
         let n = samples.len();
+        passes.record(n);
         let error = (n as f64 / target as f64 - 1.0).abs();
         let done = error <= SEARCH_TOLERANCE;
         let next = next_spacing(d, n, target, &mut previous);
@@ -221,6 +257,17 @@ fn search_spacing(
     }
     let (_, d, pool, samples) = best.expect("at least one pass ran");
     (d, Some(pool), samples)
+}
+
+/// The spacing expected to plant `target` roots over `effective_area` (see
+/// [`GUIDED_FIRST_GUESS`]).
+fn first_guess(effective_area: f64, sampler: SamplerKind, target: usize) -> f32 {
+    let packing = match sampler {
+        SamplerKind::Guided => GUIDED_FIRST_GUESS,
+        SamplerKind::Random => RANDOM_FIRST_GUESS,
+    };
+    let kept = (1.0 - EDGE_LOSS / (target.max(1) as f64).sqrt()).max(0.25);
+    (effective_area * packing * kept / target.max(1) as f64).sqrt() as f32
 }
 
 /// The secant step of the spacing search; `previous` holds the last

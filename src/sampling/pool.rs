@@ -161,17 +161,28 @@ impl<'a> DensityField<'a> {
     }
 }
 
-/// The pool points not yet removed, with O(1) removal and uniform choice.
+/// The pool points not yet removed, with O(1) removal and uniform choice,
+/// and how many are left in each grid cell (so that radius queries skip the
+/// cells already emptied: most of the ball around a new sample lies behind
+/// the front).
 struct AliveSet {
     list: Vec<u32>,
     slot: Vec<u32>,
+    /// Per pool slot, its grid cell id.
+    slot_cell: Vec<u32>,
+    /// Per grid cell id, the points of it still alive.
+    cell_alive: Vec<u32>,
 }
 
 impl AliveSet {
     const GONE: u32 = u32::MAX;
 
-    fn new(n: usize) -> Self {
-        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect() }
+    fn new(grid: &StaticGrid) -> Self {
+        let slot_cell = grid.slot_cells();
+        let n = slot_cell.len();
+        let mut cell_alive = vec![0u32; grid.cell_count()];
+        slot_cell.iter().for_each(|&c| cell_alive[c as usize] += 1);
+        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect(), slot_cell, cell_alive }
     }
 
     #[inline]
@@ -179,11 +190,18 @@ impl AliveSet {
         self.slot[i as usize] != Self::GONE
     }
 
+    /// Whether every point of grid cell `cell` has been removed.
+    #[inline]
+    fn cell_is_empty(&self, cell: u32) -> bool {
+        self.cell_alive[cell as usize] == 0
+    }
+
     fn remove(&mut self, i: u32) {
         let s = self.slot[i as usize];
         if s == Self::GONE {
             return;
         }
+        self.cell_alive[self.slot_cell[i as usize] as usize] -= 1;
         let last = self.list.pop().expect("non-empty when an element is alive");
         if last != i {
             self.list[s as usize] = last;
@@ -282,7 +300,7 @@ impl<'a> DiskSampler<'a> {
             positions,
             points: &pool.points,
             grid: &pool.grid,
-            alive: AliveSet::new(pool.points.len()),
+            alive: AliveSet::new(&pool.grid),
             samples: Vec::new(),
             sample_grid: DynamicGrid::new(cell),
             patch: NearbyPatch::new(surface),
@@ -330,9 +348,16 @@ impl<'a> DiskSampler<'a> {
     /// `radius`, and its distance.
     pub(crate) fn nearest_alive(&self, position: Vec3, radius: f32) -> Option<(f32, u32)> {
         let mut best: Option<(f32, u32)> = None;
-        self.grid.for_each_slot_within(position, radius, |k, d2| {
-            if self.alive.contains(k) && best.is_none_or(|b| d2 < b.0) {
-                best = Some((d2, k));
+        let r2 = radius * radius;
+        self.grid.for_each_cell_within(position, radius, |cell, first, slots| {
+            if self.alive.cell_is_empty(cell) {
+                return;
+            }
+            for (k, q) in (first..).zip(slots) {
+                let d2 = (*q - position).length_squared();
+                if d2 <= r2 && self.alive.contains(k) && best.is_none_or(|b| d2 < b.0) {
+                    best = Some((d2, k));
+                }
             }
         });
         best.map(|(d2, k)| (d2.sqrt(), k))
@@ -355,16 +380,22 @@ impl<'a> DiskSampler<'a> {
         let reach = 2.0 * p.spacing;
         self.patch.gather(self.surface, self.positions, p.face, p.position, p.normal, reach);
         let (patch, alive, points) = (&self.patch, &mut self.alive, self.points);
-        self.grid.for_each_slot_within(p.position, reach, |k, _| {
-            if !alive.contains(k) {
+        let reach2 = reach * reach;
+        self.grid.for_each_cell_within(p.position, reach, |cell, first, slots| {
+            if alive.cell_is_empty(cell) {
                 return;
             }
-            let q = &points[k as usize];
-            let g = patch.geodesic_to(q.position, q.normal, q.face);
-            if g <= p.spacing.max(q.spacing) {
-                alive.remove(k);
-            } else if g <= reach {
-                candidates.push(k);
+            for (k, at) in (first..).zip(slots) {
+                if (*at - p.position).length_squared() > reach2 || !alive.contains(k) {
+                    continue;
+                }
+                let q = &points[k as usize];
+                let g = patch.geodesic_to(q.position, q.normal, q.face);
+                if g <= p.spacing.max(q.spacing) {
+                    alive.remove(k);
+                } else if g <= reach {
+                    candidates.push(k);
+                }
             }
         });
     }
