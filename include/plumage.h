@@ -221,6 +221,14 @@
 #define PLUMAGE_PRESET_SCALES 1
 
 /**
+ * `plumage_config_init_preset`: contour feathers that lie down, the
+ * defaults of `plumage_config_init` with bent shafts (4 segments): each
+ * feather drapes over what lies beneath it, for several times a rigid
+ * feather's adjustment cost.
+ */
+#define PLUMAGE_PRESET_SLEEK 2
+
+/**
  * Progress phase: checking and welding the mesh, building the surface.
  */
 #define PLUMAGE_PHASE_PREPARING 0
@@ -1038,7 +1046,8 @@ void plumage_config_init(struct PlumageConfig *cfg);
 /**
  * Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
  * `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
- * gives; `PLUMAGE_PRESET_SCALES` fish scales. An unknown preset is refused
+ * gives; `PLUMAGE_PRESET_SCALES` fish scales; `PLUMAGE_PRESET_SLEEK`
+ * feathers with bent shafts that lie down. An unknown preset is refused
  * with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
  *
  * # Safety

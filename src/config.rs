@@ -167,6 +167,12 @@ pub enum Preset {
     /// segments, a small bend), in staggered rows, each overlapping the
     /// next row by half.
     Scales,
+    /// Contour feathers that lie down: the defaults of [`Preset::Feathers`]
+    /// with bent shafts (four segments), so each feather drapes over what
+    /// lies beneath it (at rest, on the shared models, tip heights about
+    /// half the kite's and bristles a tenth). A bent feather costs several
+    /// times a kite to adjust (README, "Bent feathers").
+    Sleek,
 }
 
 impl Default for Config {
@@ -231,6 +237,7 @@ impl Config {
     pub fn preset(preset: Preset) -> Self {
         match preset {
             Preset::Feathers => Self::default(),
+            Preset::Sleek => Self { shaft_segments: 4, ..Self::default() },
             Preset::Scales => Self {
                 length_per_spacing: 2.0,
                 width_per_spacing: 2.0,

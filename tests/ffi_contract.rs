@@ -485,7 +485,8 @@ fn validation_reports_tip_heights_and_fills_older_structs() {
     unsafe { plumage_system_destroy(sys) };
 }
 
-/// Presets: scales are short, wide and nearly rigid; an unknown preset is
+/// Presets: scales are short, wide and nearly rigid; sleek feathers are the
+/// default feathers with four shaft segments; an unknown preset is
 /// refused and leaves the struct as it was; a scale coat is collision-free
 /// and its scales are half as long as feathers would be.
 #[test]
@@ -503,6 +504,12 @@ fn presets_fill_the_config() {
     assert_eq!(
         (feathers.length_per_spacing, feathers.shaft_segments),
         (plain.length_per_spacing, plain.shaft_segments)
+    );
+    let mut sleek = scales;
+    assert_eq!(unsafe { plumage_config_init_preset(&mut sleek, PLUMAGE_PRESET_SLEEK) }, PLUMAGE_STATUS_OK);
+    assert_eq!(
+        (sleek.length_per_spacing, sleek.width_per_spacing, sleek.shaft_segments, sleek.bend_limit),
+        (plain.length_per_spacing, plain.width_per_spacing, 4, plain.bend_limit)
     );
     let mut kept = scales;
     assert_eq!(unsafe { plumage_config_init_preset(&mut kept, 7) }, PLUMAGE_STATUS_INVALID_ARGUMENT);

@@ -143,7 +143,11 @@ class PlumageSettings(bpy.types.PropertyGroup):
     mode: EnumProperty(name="Mode", items=[("INCREMENTAL", "Incremental", ""), ("LEGACY", "Legacy", ""), ("REBUILD", "Rebuild", "")])
     preset: EnumProperty(
         name="Preset",
-        items=[("FEATHERS", "Feathers", "Contour feathers, long and narrow"), ("SCALES", "Scales", "Fish scales, short, wide and nearly rigid")],
+        items=[
+            ("FEATHERS", "Feathers", "Contour feathers, long and narrow, rigid (fastest)"),
+            ("SLEEK", "Sleek", "Contour feathers with bent shafts that lie down over what is beneath them (slower)"),
+            ("SCALES", "Scales", "Fish scales, short, wide and nearly rigid"),
+        ],
     )
     shaft_segments: IntProperty(
         name="Segments", default=0, min=0, max=4, description="Shaft segments (0 = the preset's): more lets a feather bend over what lies beneath it"

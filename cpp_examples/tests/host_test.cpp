@@ -468,7 +468,8 @@ int default_flow() {
 }
 
 // --preset scales: the library's scale defaults reach the report, and the
-// scales are about half as long as the feathers of the same spacing.
+// scales are about half as long as the feathers of the same spacing;
+// --preset sleek bends the feathers' shafts.
 int preset_scales() {
     const json feathers = dress("preset_feathers", {"--frames", "0", "--feathers", "300"}, 0);
     const json scales = dress("preset_scales", {"--frames", "0", "--feathers", "300", "--preset", "scales"}, 0);
@@ -477,6 +478,12 @@ int preset_scales() {
     CHECK(scales["static"]["intersecting_pairs"] == 0 && scales["static"]["body_penetrations"] == 0);
     const json over = dress("preset_override", {"--frames", "0", "--feathers", "300", "--preset", "scales", "--shaft-segments", "3"}, 0);
     CHECK(over["config"]["shaft_segments"] == 3);
+    // --preset sleek: the feathers' defaults with bent shafts; they lie
+    // lower than the kites of the same model and seed.
+    const json sleek = dress("preset_sleek", {"--frames", "0", "--feathers", "300", "--preset", "sleek"}, 0);
+    CHECK(sleek["config"]["shaft_segments"] == 4 && sleek["config"]["length_per_spacing"] == 4.0);
+    CHECK(sleek["static"]["intersecting_pairs"] == 0 && sleek["static"]["body_penetrations"] == 0);
+    CHECK(sleek["static"]["tip_height_median"].get<double>() < feathers["static"]["tip_height_median"].get<double>());
     return 0;
 }
 
@@ -554,7 +561,7 @@ int bad_options() {
         {{"--feathers", "10", "--spacing", "0.5"}, "alternatives"},
         {{"--fps", "0"}, "--fps"},
         {{"--flow", "1,2"}, "X,Y,Z"},
-        {{"--preset", "fur"}, "feathers|scales"},
+        {{"--preset", "fur"}, "feathers|sleek|scales"},
         {{"--theta", "nan"}, "--theta"},
         {{"a.glb", "b.glb"}, "more than one input"},
         {{"--out"}, "missing value"},

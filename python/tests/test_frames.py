@@ -137,6 +137,9 @@ def test_scales_preset_and_bent_feathers(sphere) -> None:
         # A four-segment shaft: more than the kite's four vertices a feather, triangles to match.
         assert g.positions.shape[0] > 4 * bent.feather_count
         assert bent.feather_triangles().shape == (bent.feather_count, 3 * (g.triangles.shape[0] // bent.feather_count), 3)
+    # The sleek preset is the feathers' defaults with four shaft segments.
+    with plumage.System(v, t, target_feathers=300, threads=1, preset="sleek") as sleek:
+        assert sleek.feather_geometry().positions.shape == g.positions.shape
     with pytest.raises(plumage.PlumageError) as e:
         plumage.System(v, t, preset="fur")
     assert e.value.status_name == "INVALID_ARGUMENT"

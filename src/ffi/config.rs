@@ -185,6 +185,12 @@ pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
 /// each overlapping the next by half.
 pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 
+/// `plumage_config_init_preset`: contour feathers that lie down, the
+/// defaults of `plumage_config_init` with bent shafts (4 segments): each
+/// feather drapes over what lies beneath it, for several times a rigid
+/// feather's adjustment cost.
+pub const PLUMAGE_PRESET_SLEEK: u32 = 2;
+
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
 /// completed share of it in [0, 1]. Return 0 to continue; any other value
 /// stops the running call, which then returns PLUMAGE_STATUS_INTERRUPTED and

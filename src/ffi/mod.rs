@@ -106,7 +106,8 @@ pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
 
 /// Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
 /// `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
-/// gives; `PLUMAGE_PRESET_SCALES` fish scales. An unknown preset is refused
+/// gives; `PLUMAGE_PRESET_SCALES` fish scales; `PLUMAGE_PRESET_SLEEK`
+/// feathers with bent shafts that lie down. An unknown preset is refused
 /// with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
 ///
 /// # Safety
@@ -120,6 +121,7 @@ pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, pre
         let preset = match preset {
             PLUMAGE_PRESET_FEATHERS => crate::Preset::Feathers,
             PLUMAGE_PRESET_SCALES => crate::Preset::Scales,
+            PLUMAGE_PRESET_SLEEK => crate::Preset::Sleek,
             p => {
                 return Err(Failure::new(
                     PLUMAGE_STATUS_INVALID_ARGUMENT,
