@@ -28,7 +28,7 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{ceil_i32, floor_i32};
+use super::height_field::{ceil_i32, floor_i32, max_f, min_f};
 use super::{AdjustParams, AdjustSteps, HeightField};
 use crate::feather::FeatherPose;
 
@@ -505,19 +505,6 @@ impl HeightField {
         let inv = if h > 0.0 { self.inv_near[i] } else { self.inv_far[i] };
         Some(RollLine { a: h * inv, c_pos: -y_lo * inv, c_neg: -y_hi * inv })
     }
-}
-
-/// The larger of two values (plain comparison: no NaN handling, which
-/// costs several instructions in these per-cell loops; inputs are finite).
-#[inline(always)]
-fn max_f(a: f32, b: f32) -> f32 {
-    if a > b { a } else { b }
-}
-
-/// The smaller of two values (see [`max_f`]).
-#[inline(always)]
-fn min_f(a: f32, b: f32) -> f32 {
-    if a < b { a } else { b }
 }
 
 /// `need` of a cell with nothing in it: no pitch violates it.

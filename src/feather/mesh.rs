@@ -20,7 +20,7 @@ use glam::Vec3;
 /// `S + 1` joints from root to tip (v 0.5), then the +y vane's edge at each
 /// station, then the −y vane's (v = 0.5 ± y/W, so the corners reach 1 and
 /// 0); u is the fraction of the length along the unbent shaft. The
-/// triangles are those of [`feather_triangles`](super::feather_triangles),
+/// triangles are those of [`feather_triangles`],
 /// in its order, all facing away from the skin.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FeatherMeshLayout {

@@ -21,9 +21,9 @@
 //! 6. **report**: the call's [`FrameReport`](crate::stats::FrameReport)
 //!    (`Coat::frame_report`).
 //!
-//! Who runs what: create and evaluate run [`solve`] (every phase from
+//! Who runs what: create and evaluate run [`solve()`] (every phase from
 //! scratch); a step runs [`advance`], which for the `rebuild` mode is
-//! [`solve`] again (counting the frame) and for the incremental and legacy
+//! [`solve()`] again (counting the frame) and for the incremental and legacy
 //! modes [`step_coat`] (the frame-to-frame variants of phases 3 and 5).
 //! Both leave the coat ready for the export and the checks.
 

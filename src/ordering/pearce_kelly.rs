@@ -4,7 +4,7 @@
 //! `order_graph`.
 //!
 //! # Why our own Pearce–Kelly
-//! Insertions use the Pearce–Kelly algorithm (PK, paper ref. [12]): when an
+//! Insertions use the Pearce–Kelly algorithm (PK, paper ref. \[12\]): when an
 //! edge `p → q` goes backwards in the order, search forward from `q` among
 //! roots ranked before `p`, backward from `p` among roots ranked after `q`,
 //! and shuffle only those two sets. `petgraph::acyclic::Acyclic` implements

@@ -267,7 +267,7 @@ impl FeatherBoxes {
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
-    /// [`intersecting_pairs`], bounding boxes first: the boxes of the whole
+    /// [`intersecting_pairs`](super::intersecting_pairs), bounding boxes first: the boxes of the whole
     /// feathers, then of each pair of triangles).
     pub(crate) fn intersects(&self, b: &[[Vec3; 3]]) -> bool {
         self.intersects_boxed(&BoxedTriangles::new(b))
