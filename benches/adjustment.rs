@@ -13,7 +13,8 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use plumage::Config;
 use plumage::adjustment::{
-    AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection, adjust_feather,
+    AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, OrderedRun, Selection,
+    adjust_feather,
 };
 use plumage::body::BodyIndex;
 use plumage::coat::{Coat, Dressing};
@@ -97,15 +98,17 @@ impl Scene {
 
     fn adjust(&self, adjuster: &mut Adjuster, poses: &mut [FeatherPose]) -> plumage::adjustment::AdjustStats {
         adjuster.adjust_in_order(
-            &self.frames,
-            &self.shapes,
+            &OrderedRun {
+                frames: &self.frames,
+                shapes: &self.shapes,
+                order: &self.order,
+                rank: &self.rank,
+                candidates: CandidateLists::new(&self.offsets, &self.candidates),
+                body: &self.body,
+                params: &self.params,
+                steps: AdjustSteps::Full,
+            },
             poses,
-            &self.order,
-            &self.rank,
-            CandidateLists::new(&self.offsets, &self.candidates),
-            &self.body,
-            &self.params,
-            AdjustSteps::Full,
             Selection::All,
         )
     }

@@ -5,8 +5,8 @@
 
 use glam::Vec3;
 use plumage::adjustment::{
-    AdjustParams, AdjustStats, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, Selection,
-    adjust_feather, adjust_in_order,
+    AdjustParams, AdjustStats, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, OrderedRun,
+    Selection, adjust_feather, adjust_in_order,
 };
 use plumage::body::BodyIndex;
 use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
@@ -190,15 +190,17 @@ impl Scene {
     fn adjust(&self, params: &AdjustParams) -> (Vec<FeatherPose>, plumage::adjustment::AdjustStats) {
         let mut poses = vec![FeatherPose::default(); self.frames.len()];
         let stats = adjust_in_order(
-            &self.frames,
-            &self.shapes,
+            &OrderedRun {
+                frames: &self.frames,
+                shapes: &self.shapes,
+                order: &self.order,
+                rank: &self.rank,
+                candidates: self.lists(),
+                body: &self.body,
+                params,
+                steps: AdjustSteps::Full,
+            },
             &mut poses,
-            &self.order,
-            &self.rank,
-            self.lists(),
-            &self.body,
-            params,
-            AdjustSteps::Full,
             None,
         );
         (poses, stats)
@@ -591,15 +593,17 @@ fn readjust_stats(
     selection: Selection<'_>,
 ) -> AdjustStats {
     adjuster.adjust_in_order(
-        &scene.frames,
-        &scene.shapes,
+        &OrderedRun {
+            frames: &scene.frames,
+            shapes: &scene.shapes,
+            order: &scene.order,
+            rank: &scene.rank,
+            candidates: scene.lists(),
+            body: &scene.body,
+            params: &AdjustParams::default(),
+            steps: AdjustSteps::Full,
+        },
         poses,
-        &scene.order,
-        &scene.rank,
-        scene.lists(),
-        &scene.body,
-        &AdjustParams::default(),
-        AdjustSteps::Full,
         selection,
     )
 }
@@ -698,15 +702,17 @@ fn fine_pitch_only_keeps_roll_and_stays_clean() {
     let rolls: Vec<f32> = poses.iter().map(|p| p.roll).collect();
     let mut adjuster = Adjuster::new();
     adjuster.adjust_in_order(
-        &scene.frames,
-        &scene.shapes,
+        &OrderedRun {
+            frames: &scene.frames,
+            shapes: &scene.shapes,
+            order: &scene.order,
+            rank: &scene.rank,
+            candidates: scene.lists(),
+            body: &scene.body,
+            params: &params,
+            steps: AdjustSteps::FinePitchOnly,
+        },
         &mut poses,
-        &scene.order,
-        &scene.rank,
-        scene.lists(),
-        &scene.body,
-        &params,
-        AdjustSteps::FinePitchOnly,
         Selection::All,
     );
     assert_eq!(poses.iter().map(|p| p.roll).collect::<Vec<_>>(), rolls);
@@ -765,15 +771,17 @@ fn warm_scratch_allocates_nothing() {
             .map(|_| {
                 let before = allocations_on_this_thread();
                 adjuster.adjust_in_order(
-                    &scene.frames,
-                    &scene.shapes,
+                    &OrderedRun {
+                        frames: &scene.frames,
+                        shapes: &scene.shapes,
+                        order: &scene.order,
+                        rank: &scene.rank,
+                        candidates: scene.lists(),
+                        body: &scene.body,
+                        params: &params,
+                        steps: AdjustSteps::Full,
+                    },
                     &mut poses,
-                    &scene.order,
-                    &scene.rank,
-                    scene.lists(),
-                    &scene.body,
-                    &params,
-                    AdjustSteps::Full,
                     Selection::All,
                 );
                 allocations_on_this_thread() - before

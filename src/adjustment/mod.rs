@@ -29,7 +29,7 @@ mod settle;
 mod steps;
 
 pub use height_field::HeightField;
-pub use levels::{AdjustStats, Adjuster, CandidateLists, Selection, adjust_in_order};
+pub use levels::{AdjustStats, Adjuster, CandidateLists, OrderedRun, Selection, adjust_in_order};
 pub use steps::adjust_feather;
 
 use crate::feather::{FeatherPose, FeatherTriangles};

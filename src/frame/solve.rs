@@ -3,7 +3,7 @@
 //! order static and every feather adjusted from a flat start.
 
 use super::phases::{self, Workspace};
-use crate::adjustment::{AdjustSteps, CandidateLists, Selection};
+use crate::adjustment::{AdjustSteps, CandidateLists, OrderedRun, Selection};
 use crate::coat::{Coat, Dressing};
 use crate::error::Result;
 use crate::feather::FeatherPose;
@@ -34,19 +34,19 @@ pub fn solve(
     progress.check(Phase::Adjusting, 0.0)?;
     phases::body(coat, dressing);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    let stats = work.adjuster.adjust_in_order_until(
-        &coat.frames,
-        &dressing.shapes,
-        &mut coat.poses,
-        coat.order.order(),
-        coat.order.ranks(),
-        CandidateLists::new(offsets, indices),
-        &coat.body,
-        &dressing.adjust_params,
-        AdjustSteps::Full,
-        Selection::All,
-        &|done| progress.check(Phase::Adjusting, done).is_ok(),
-    );
+    let run = OrderedRun {
+        frames: &coat.frames,
+        shapes: &dressing.shapes,
+        order: coat.order.order(),
+        rank: coat.order.ranks(),
+        candidates: CandidateLists::new(offsets, indices),
+        body: &coat.body,
+        params: &dressing.adjust_params,
+        steps: AdjustSteps::Full,
+    };
+    let stats = work.adjuster.adjust_in_order_until(&run, &mut coat.poses, Selection::All, &|done| {
+        progress.check(Phase::Adjusting, done).is_ok()
+    });
     // A stopped adjustment (None) has set the progress's stop flag.
     progress.check(Phase::Adjusting, 1.0)?;
     let stats = stats.unwrap_or_default();

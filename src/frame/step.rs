@@ -44,7 +44,7 @@
 
 use super::phases::{self, Workspace};
 use crate::Mode;
-use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, Selection};
+use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, OrderedRun, Selection};
 use crate::animation::contact::{Candidates, Contacts, Footprint, Posed, Sphere};
 use crate::animation::motion::{RootMap, root_maps};
 use crate::body::BodyIndex;
@@ -307,24 +307,21 @@ impl Pass<'_> {
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
         let d = self.dressing;
-        let run = match walk {
+        let walk_with = match walk {
             Walk::Levels => Adjuster::adjust_in_order_until,
             Walk::Sparse => Adjuster::adjust_sparse_until,
         };
-        run(
-            adjuster,
-            self.frames,
-            &d.shapes,
-            poses,
-            self.order.order(),
-            self.order.ranks(),
+        let run = OrderedRun {
+            frames: self.frames,
+            shapes: &d.shapes,
+            order: self.order.order(),
+            rank: self.order.ranks(),
             candidates,
-            self.body,
-            &d.adjust_params,
-            self.steps,
-            selection,
-            keep_going,
-        )
+            body: self.body,
+            params: &d.adjust_params,
+            steps: self.steps,
+        };
+        walk_with(adjuster, &run, poses, selection, keep_going)
     }
 }
 

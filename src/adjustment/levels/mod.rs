@@ -152,57 +152,26 @@ impl Adjuster {
     /// bitwise the same for any thread count.
     ///
     /// Panics if the slices disagree in length.
-    #[allow(clippy::too_many_arguments)]
-    #[allow(clippy::too_many_arguments)]
     pub fn adjust_in_order(
         &mut self,
-        frames: &[RootFrame],
-        shapes: &[FeatherShape],
+        run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
-        order: &[u32],
-        rank: &[u32],
-        candidates: CandidateLists<'_>,
-        body: &BodyIndex,
-        params: &AdjustParams,
-        steps: AdjustSteps,
         selection: Selection<'_>,
     ) -> AdjustStats {
-        let all = self.adjust_in_order_until(
-            frames,
-            shapes,
-            poses,
-            order,
-            rank,
-            candidates,
-            body,
-            params,
-            steps,
-            selection,
-            &|_| true,
-        );
-        all.unwrap_or_default()
+        self.adjust_in_order_until(run, poses, selection, &|_| true).unwrap_or_default()
     }
 
     /// As [`Adjuster::adjust_in_order`], asking `keep_going(fraction done)`
     /// before each level; `None` when it says stop (then `poses` holds a
     /// mix of old and new poses and the caller must restore them).
-    #[allow(clippy::too_many_arguments)]
     pub fn adjust_in_order_until(
         &mut self,
-        frames: &[RootFrame],
-        shapes: &[FeatherShape],
+        run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
-        order: &[u32],
-        rank: &[u32],
-        candidates: CandidateLists<'_>,
-        body: &BodyIndex,
-        params: &AdjustParams,
-        steps: AdjustSteps,
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
-        let lists = (frames, shapes, order, rank, candidates);
-        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (false, false))
+        self.ordered_run(run, poses, selection, keep_going, (false, false))
     }
 
     /// As [`Adjuster::adjust_in_order_until`], one feather after the other
@@ -219,40 +188,28 @@ impl Adjuster {
     /// levels, bitwise: a feather reads only earlier ones, final either
     /// way, and one that no earlier adjusted feather changed under is left
     /// alone by both.
-    #[allow(clippy::too_many_arguments)]
     pub fn adjust_sparse_until(
         &mut self,
-        frames: &[RootFrame],
-        shapes: &[FeatherShape],
+        run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
-        order: &[u32],
-        rank: &[u32],
-        candidates: CandidateLists<'_>,
-        body: &BodyIndex,
-        params: &AdjustParams,
-        steps: AdjustSteps,
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
     ) -> Option<AdjustStats> {
-        let lists = (frames, shapes, order, rank, candidates);
-        self.ordered_run(lists, poses, body, params, steps, selection, keep_going, (true, true))
+        self.ordered_run(run, poses, selection, keep_going, (true, true))
     }
 
     /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
     /// `sparse`, verifying with every check or the pairs only (see
     /// [`Adjuster::adjust_sparse_until`]).
-    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn ordered_run(
         &mut self,
-        (frames, shapes, order, rank, candidates): (&[RootFrame], &[FeatherShape], &[u32], &[u32], CandidateLists<'_>),
+        run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
-        body: &BodyIndex,
-        params: &AdjustParams,
-        steps: AdjustSteps,
         selection: Selection<'_>,
         keep_going: &dyn Fn(f32) -> bool,
         (sparse, pairs_only): (bool, bool),
     ) -> Option<AdjustStats> {
+        let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps } = *run;
         let start = Instant::now();
         let settle_rate = std::mem::take(&mut self.settle_rate);
         let n = frames.len();
@@ -571,22 +528,27 @@ impl Adjuster {
     }
 }
 
+/// What an ordered run reads: every feather's root frame and shape, the
+/// adjustment `order` (`order[k]` is the k-th feather; `rank` is its
+/// inverse), each feather's `candidates` (roots within reach; its obstacles
+/// are those of smaller rank), the body, and the adjustment's parameters
+/// and steps. One entry per feather in each slice and row list.
+#[derive(Clone, Copy)]
+pub struct OrderedRun<'a> {
+    pub frames: &'a [RootFrame],
+    pub shapes: &'a [FeatherShape],
+    pub order: &'a [u32],
+    pub rank: &'a [u32],
+    pub candidates: CandidateLists<'a>,
+    pub body: &'a BodyIndex,
+    pub params: &'a AdjustParams,
+    pub steps: AdjustSteps,
+}
+
 /// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or
 /// only those marked in `subset` (the others stay as fixed obstacles). For
 /// repeated use (every frame) keep an [`Adjuster`] instead.
-#[allow(clippy::too_many_arguments)]
-pub fn adjust_in_order(
-    frames: &[RootFrame],
-    shapes: &[FeatherShape],
-    poses: &mut [FeatherPose],
-    order: &[u32],
-    rank: &[u32],
-    candidates: CandidateLists<'_>,
-    body: &BodyIndex,
-    params: &AdjustParams,
-    steps: AdjustSteps,
-    subset: Option<&[bool]>,
-) -> AdjustStats {
+pub fn adjust_in_order(run: &OrderedRun<'_>, poses: &mut [FeatherPose], subset: Option<&[bool]>) -> AdjustStats {
     let selection = subset.map_or(Selection::All, Selection::Subset);
-    Adjuster::new().adjust_in_order(frames, shapes, poses, order, rank, candidates, body, params, steps, selection)
+    Adjuster::new().adjust_in_order(run, poses, selection)
 }

@@ -33,15 +33,17 @@ impl TwoFeathers {
         let (offsets, indices) = ([0u32, 1, 2], [1u32, 0]);
         adjuster.settle_next_run(rate);
         adjuster.adjust_in_order(
-            &self.frames,
-            &self.shapes,
+            &OrderedRun {
+                frames: &self.frames,
+                shapes: &self.shapes,
+                order: &[0, 1],
+                rank: &[0, 1],
+                candidates: CandidateLists::new(&offsets, &indices),
+                body: &self.body,
+                params: &self.params,
+                steps: AdjustSteps::Full,
+            },
             poses,
-            &[0, 1],
-            &[0, 1],
-            CandidateLists::new(&offsets, &indices),
-            &self.body,
-            &self.params,
-            AdjustSteps::Full,
             selection,
         );
     }
@@ -200,18 +202,17 @@ fn a_sparse_run_matches_the_levels() {
     let params = AdjustParams::default();
     let mut start = vec![FeatherPose::default(); n];
     let mut adjuster = Adjuster::new();
-    let all = adjuster.adjust_in_order(
-        &frames,
-        &shapes,
-        &mut start,
-        &order,
-        &rank,
+    let ordered = OrderedRun {
+        frames: &frames,
+        shapes: &shapes,
+        order: &order,
+        rank: &rank,
         candidates,
-        &body,
-        &params,
-        AdjustSteps::Full,
-        Selection::All,
-    );
+        body: &body,
+        params: &params,
+        steps: AdjustSteps::Full,
+    };
+    let all = adjuster.adjust_in_order(&ordered, &mut start, Selection::All);
     assert_eq!(all.adjusted, n);
     let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
     let mut checked = 0;
@@ -234,19 +235,8 @@ fn a_sparse_run_matches_the_levels() {
             let run = |sparse: bool, pairs_only: bool| {
                 let mut adjuster = Adjuster::new();
                 let mut poses = poses.clone();
-                let lists = (&frames[..], &shapes[..], &order[..], &rank[..], candidates);
-                let stats = adjuster
-                    .ordered_run(
-                        lists,
-                        &mut poses,
-                        &body,
-                        &params,
-                        AdjustSteps::Full,
-                        selection,
-                        &|_| true,
-                        (sparse, pairs_only),
-                    )
-                    .unwrap();
+                let stats =
+                    adjuster.ordered_run(&ordered, &mut poses, selection, &|_| true, (sparse, pairs_only)).unwrap();
                 (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
             };
             for pairs_only in [false, true] {
