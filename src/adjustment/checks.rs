@@ -102,7 +102,8 @@ pub(crate) fn pose_is_clear_boxed(
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
-    exact_check(frame, shape, pose, boxes, body, scratch, false, &mut CheckHints::default())
+    let at = FeatherInPlace { frame, shape, obstacles: boxes, body };
+    exact_check(&at, pose, scratch, false, &mut CheckHints::default())
 }
 
 /// What made the last exact checks of one feather fail: the obstacle and
@@ -190,41 +191,44 @@ fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut
     })
 }
 
+/// A feather where it grows and what it must clear: its root frame and
+/// shape, its obstacles (with their boxes) and the body.
+#[derive(Clone, Copy)]
+pub(crate) struct FeatherInPlace<'a> {
+    pub(crate) frame: &'a RootFrame,
+    pub(crate) shape: &'a FeatherShape,
+    pub(crate) obstacles: BoxesOf<'a>,
+    pub(crate) body: &'a BodyIndex,
+}
+
 /// `pose_is_clear`, and with `tops` also clear of every [`raised_top`](super::obstacle::raised_top)
 /// (last: most poses that fail, fail before it; testing the tops before
 /// the body took 3 % more instructions in `adjust_feather` on the
 /// Flamingo bench).
-#[allow(clippy::too_many_arguments)]
 pub(super) fn exact_check(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     pose: FeatherPose,
-    obstacles: BoxesOf<'_>,
-    body: &BodyIndex,
     scratch: &mut HeightField,
     tops: bool,
     hints: &mut CheckHints,
 ) -> bool {
-    let mine = FeatherBoxes::of_feather(frame, shape, pose);
-    boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, tops, hints)
+    let mine = FeatherBoxes::of_feather(at.frame, at.shape, pose);
+    boxes_clear(&mine, at, pose, scratch, tops, hints)
 }
 
 /// The exact tests of [`exact_check`] on triangles (`mine`, the whole
 /// feather at `pose` or a part of it): no obstacle met, no crossing of the
 /// body beyond the root socket, and with `tops` no obstacle's raised top
 /// met.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn boxes_clear(
     mine: &FeatherBoxes,
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     pose: FeatherPose,
-    obstacles: BoxesOf<'_>,
-    body: &BodyIndex,
     scratch: &mut HeightField,
     tops: bool,
     hints: &mut CheckHints,
 ) -> bool {
+    let FeatherInPlace { frame, shape, obstacles, body } = *at;
     if meets_obstacle(mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }

@@ -4,11 +4,9 @@
 //! last pose with as little change as it takes ([`repair_drape`]), which
 //! keeps an animated bent coat from popping.
 
-use super::checks::{BoxesOf, CheckHints, boxes_clear, exact_check};
+use super::checks::{CheckHints, FeatherInPlace, boxes_clear, exact_check};
 use super::{AdjustParams, HeightField};
-use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape, segment_triangles};
-use crate::geometry::RootFrame;
+use crate::feather::{FeatherPose, segment_triangles};
 use crate::validation::FeatherBoxes;
 
 /// Angle steps (radians) of the descent of a segment in [`drape`]; the
@@ -53,15 +51,12 @@ const DRAPE_RAISE_BISECTIONS: usize = 6;
 /// [`MAX_DRAPE_DESCENTS`] descents, or with no segment able to make room,
 /// the feather keeps its straight pose, which was clear.
 pub(super) fn drape(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     straight: FeatherPose,
-    boxes: BoxesOf<'_>,
-    body: &BodyIndex,
     params: &AdjustParams,
     scratch: &mut HeightField,
 ) -> FeatherPose {
-    let segments = shape.segment_count();
+    let segments = at.shape.segment_count();
     let mut hints = CheckHints::default();
     // Segment k's angle: the root's pitch for k = 0, else the bend of joint
     // k − 1 (relative to segment k − 1).
@@ -83,7 +78,7 @@ pub(super) fn drape(
         let settled = descend(high(k), low(k), |a| {
             let mut trial = pose;
             set(&mut trial, k, a);
-            segment_check(frame, shape, trial, k, boxes, body, scratch, &mut hints)
+            segment_check(at, trial, k, scratch, &mut hints)
         });
         if let Some(a) = settled {
             set(&mut pose, k, a);
@@ -104,7 +99,7 @@ pub(super) fn drape(
             trial
         };
         let mut room = |trial: FeatherPose, i: usize, scratch: &mut HeightField| {
-            (i..=k).all(|j| segment_check(frame, shape, trial, j, boxes, body, scratch, &mut hints))
+            (i..=k).all(|j| segment_check(at, trial, j, scratch, &mut hints))
         };
         let mut found = None;
         for i in (0..k).rev() {
@@ -130,7 +125,7 @@ pub(super) fn drape(
     // root segment lying in the skin plane within the contact tolerance,
     // the next bent off it: the Scales preset on a flat soup). The whole
     // feather has the last word.
-    if !exact_check(frame, shape, pose, boxes, body, scratch, true, &mut hints) {
+    if !exact_check(at, pose, scratch, true, &mut hints) {
         return straight;
     }
     pose
@@ -156,15 +151,12 @@ const REPAIR_ASCENT_STEPS: usize = 8;
 /// frame's by tens of degrees (a feather that pops while every pose is
 /// clear), where this keeps each angle unless something pushes it up.
 pub(crate) fn repair_drape(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     start: FeatherPose,
-    boxes: BoxesOf<'_>,
-    body: &BodyIndex,
     params: &AdjustParams,
     scratch: &mut HeightField,
 ) -> Option<FeatherPose> {
-    let segments = shape.segment_count();
+    let segments = at.shape.segment_count();
     if segments == 1 || start.scale <= 0.0 {
         return None;
     }
@@ -180,7 +172,7 @@ pub(crate) fn repair_drape(
         let (low, high) = range(k);
         let from = angle(&pose, k).clamp(low, high);
         set(&mut pose, k, from);
-        if segment_check(frame, shape, pose, k, boxes, body, scratch, &mut hints) {
+        if segment_check(at, pose, k, scratch, &mut hints) {
             continue;
         }
         // Segment k is not clear: raise it and every angle before it by
@@ -197,13 +189,13 @@ pub(crate) fn repair_drape(
         };
         let mut clear = |d: f32| {
             let trial = raised(d);
-            (0..=k).all(|j| segment_check(frame, shape, trial, j, boxes, body, scratch, &mut hints))
+            (0..=k).all(|j| segment_check(at, trial, j, scratch, &mut hints))
         };
         let most = (0..=k).map(|j| range(j).1 - angle(&base, j)).fold(0.0f32, f32::max);
         let d = ascend(0.0, most, &mut clear)?;
         pose = raised(d);
     }
-    exact_check(frame, shape, pose, boxes, body, scratch, true, &mut hints).then_some(pose)
+    exact_check(at, pose, scratch, true, &mut hints).then_some(pose)
 }
 
 /// The lowest angle above `from` (which is not clear) up to `high` at
@@ -268,25 +260,23 @@ fn descend(high: f32, low: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f3
 /// feather: its triangles meet no obstacle and no obstacle's raised top,
 /// and do not cross the body beyond the root socket. The drape checks each
 /// segment as it places it; the segments before it do not move then.
-#[allow(clippy::too_many_arguments)]
 fn segment_check(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     pose: FeatherPose,
     segment: usize,
-    obstacles: BoxesOf<'_>,
-    body: &BodyIndex,
     scratch: &mut HeightField,
     hints: &mut CheckHints,
 ) -> bool {
+    let (frame, shape) = (at.frame, at.shape);
     let mine = FeatherBoxes::of_flat_part(&segment_triangles(frame, shape, pose, segment), frame, shape, pose);
-    boxes_clear(&mine, frame, shape, pose, obstacles, body, scratch, true, hints)
+    boxes_clear(&mine, at, pose, scratch, true, hints)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::feather::feather_triangles;
+    use crate::feather::{FeatherShape, feather_triangles};
+    use crate::geometry::RootFrame;
     use glam::Vec3;
 
     #[test]

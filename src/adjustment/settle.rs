@@ -4,7 +4,7 @@
 //! settling once its tip is close to the solved pose's (see
 //! [`crate::animation::coherence`] for the measurements behind it).
 
-use super::checks::{BoxesOf, pose_is_clear_boxed};
+use super::checks::{BoxesOf, FeatherInPlace, pose_is_clear_boxed};
 use super::drape::repair_drape;
 use super::{AdjustParams, HeightField};
 use crate::body::BodyIndex;
@@ -125,7 +125,8 @@ pub(super) fn settled_pose(
         .chain(faster)
         .find(|&pose| clear(pose, field))
         .or_else(|| {
-            repair_drape(frame, shape, current, boxes, body, params, field).filter(|p| p.pitch <= params.max_pitch)
+            repair_drape(&FeatherInPlace { frame, shape, obstacles: boxes, body }, current, params, field)
+                .filter(|p| p.pitch <= params.max_pitch)
         })
         .or_else(|| large.clone().find(|&pose| clear(pose, field)))
         .unwrap_or(solved)

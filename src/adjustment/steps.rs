@@ -4,7 +4,7 @@
 //! ([`super::checks`]), shortened where no pose fits, then a segmented
 //! shaft draped ([`super::drape`]).
 
-use super::checks::{BoxesOf, CheckHints, exact_check};
+use super::checks::{BoxesOf, CheckHints, FeatherInPlace, exact_check};
 use super::drape::drape;
 use super::height_field::{JUDGE_FRACTION, LocalMap};
 use super::obstacle::ObstacleBoxes;
@@ -62,8 +62,8 @@ pub fn adjust_feather(
     let mut boxes = std::mem::take(&mut scratch.boxes);
     boxes.clear();
     boxes.extend(obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)));
-    let all = BoxesOf { ids: None, all: &boxes };
-    let outcome = adjust_feather_boxed(frame, shape, previous, obstacles, all, body, params, steps, scratch);
+    let at = FeatherInPlace { frame, shape, obstacles: BoxesOf { ids: None, all: &boxes }, body };
+    let outcome = adjust_feather_boxed(&at, previous, obstacles, params, steps, scratch);
     scratch.boxes = boxes;
     outcome
 }
@@ -72,40 +72,33 @@ pub fn adjust_feather(
 /// (`boxes` lists them in the order of `obstacles`): the straight feather's
 /// pose by the height field (and the exact checks), then, for a segmented
 /// shaft, its drape (see [`drape`]).
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn adjust_feather_boxed(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     previous: FeatherPose,
     obstacles: &[ObstacleFeather],
-    boxes: BoxesOf<'_>,
-    body: &BodyIndex,
     params: &AdjustParams,
     steps: AdjustSteps,
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
-    let straight = straight_pose(frame, shape, previous, obstacles, boxes, body, params, steps, scratch);
-    if shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
+    let straight = straight_pose(at, previous, obstacles, params, steps, scratch);
+    if at.shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
         return straight;
     }
-    let draped = drape(frame, shape, straight.pose, boxes, body, params, scratch);
+    let draped = drape(at, straight.pose, params, scratch);
     AdjustOutcome { pose: draped, ..straight }
 }
 
 /// The straight feather's pose (all joints unbent): the three steps on the
 /// height field, each pose checked exactly, shortening where no pose fits.
-#[allow(clippy::too_many_arguments)]
 fn straight_pose(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     previous: FeatherPose,
     obstacles: &[ObstacleFeather],
-    boxes: BoxesOf<'_>,
-    body: &BodyIndex,
     params: &AdjustParams,
     steps: AdjustSteps,
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
+    let FeatherInPlace { frame, shape, body, .. } = *at;
     scratch.set_resolution(params.height_field_u, params.height_field_v);
     let collision_tests = fill_field(scratch, frame, shape, obstacles, body, params, false);
     // The height field is conservative but coarse, and blind to what it
@@ -143,7 +136,7 @@ fn straight_pose(
             if relaxed && choice.too_steep {
                 break;
             }
-            if !choice.too_steep && exact_check(frame, shape, choice.pose, boxes, body, scratch, relaxed, &mut hints) {
+            if !choice.too_steep && exact_check(at, choice.pose, scratch, relaxed, &mut hints) {
                 if scale == 1.0 {
                     return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
                 }
@@ -176,7 +169,7 @@ fn straight_pose(
         Some(choice) => (choice.pose.scale, SWEEP_MAX_PITCH.min(params.max_pitch)),
         None => (0.0, params.max_pitch),
     };
-    if let Some(pose) = exact_pitch_sweep(frame, shape, params, boxes, body, scratch, smallest, max_pitch, &mut hints) {
+    if let Some(pose) = exact_pitch_sweep(at, params, scratch, smallest, max_pitch, &mut hints) {
         return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0 };
     }
     match found {
@@ -205,18 +198,15 @@ const SWEEP_MAX_PITCH: f32 = 0.6;
 /// mostly at the wing roots), most find a pose this way; coverage rose
 /// from 0.848 to 0.875 on the Flamingo, 0.959 to 0.981 on the torus, 0.850
 /// to 0.853 on the bird, with 0 intersecting pairs and penetrations.
-#[allow(clippy::too_many_arguments)]
 fn exact_pitch_sweep(
-    frame: &RootFrame,
-    shape: &FeatherShape,
+    at: &FeatherInPlace<'_>,
     params: &AdjustParams,
-    boxes: BoxesOf<'_>,
-    body: &BodyIndex,
     scratch: &mut HeightField,
     smallest: f32,
     max_pitch: f32,
     hints: &mut CheckHints,
 ) -> Option<FeatherPose> {
+    let FeatherInPlace { frame, shape, obstacles: boxes, .. } = *at;
     let sizes = std::iter::once(1.0).chain(SHRINK_STEPS.iter().copied().filter(|&s| s >= params.min_scale));
     let mut within = std::mem::take(&mut scratch.sweep_obstacles);
     let mut found = None;
@@ -229,7 +219,7 @@ fn exact_pitch_sweep(
                 break;
             }
             let pose = FeatherPose { pitch, roll: 0.0, scale, bends: [0.0; MAX_JOINTS] };
-            if exact_check(frame, shape, pose, near, body, scratch, true, hints) {
+            if exact_check(&FeatherInPlace { obstacles: near, ..*at }, pose, scratch, true, hints) {
                 found = Some(pose);
                 break 'sizes;
             }

@@ -2,7 +2,7 @@
 //! or adjusted (and settled); what every feather of a level reads, and the
 //! parallel run of one level.
 
-use super::super::checks::{BoxesOf, ObstacleReach, pose_is_clear_boxed};
+use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, pose_is_clear_boxed};
 use super::super::obstacle::ObstacleBoxes;
 use super::super::settle::{SettlingFeather, settled_pose};
 use super::super::steps::adjust_feather_boxed;
@@ -273,17 +273,8 @@ pub(super) fn adjust_one(
         }
     }));
     let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
-    let solved = adjust_feather_boxed(
-        &inputs.frames[i],
-        &inputs.shapes[i],
-        poses[i],
-        &worker.obstacles,
-        boxes,
-        inputs.body,
-        inputs.params,
-        inputs.steps,
-        &mut worker.field,
-    );
+    let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
+    let solved = adjust_feather_boxed(&at, poses[i], &worker.obstacles, inputs.params, inputs.steps, &mut worker.field);
     if inputs.settle_rate <= 0.0 || solved.pose == poses[i] {
         return Visit::Adjusted(solved, solved.pose);
     }
