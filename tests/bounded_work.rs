@@ -161,6 +161,41 @@ fn spacing_multipliers_far_apart_finish() {
     }
 }
 
+/// Found by the 100 000-case `fuzz_create` run (seed 2026, case 47281): a
+/// three-sided tube of 24 triangles with one vertex's spacing multiplier at
+/// 3·10⁻³⁹ (clamped to `MAX_MULTIPLIER_RATIO` below the median) took 12 s
+/// for 94 feathers at a ratio of 100: its faces drew pool points from their
+/// densest corner and rejected nearly all. At 20 it takes a quarter second.
+#[test]
+fn a_tiny_multiplier_on_a_small_tube_finishes() {
+    let (r, h) = (0.12644576f32, 0.39312708f32);
+    let positions: Vec<f32> = (0..5)
+        .flat_map(|ring| {
+            (0..3).flat_map(move |k| {
+                let a = std::f32::consts::TAU * k as f32 / 3.0;
+                [r * a.cos(), r * a.sin(), h * ring as f32]
+            })
+        })
+        .collect();
+    let indices: Vec<u32> = (0..4u32)
+        .flat_map(|ring| {
+            (0..3u32).flat_map(move |k| {
+                let (a, b) = (3 * ring + k, 3 * ring + (k + 1) % 3);
+                [a, b, b + 3, a, b + 3, a + 3]
+            })
+        })
+        .collect();
+    let mut scale = vec![1.0f32; 15];
+    scale[12] = 2.938736e-39;
+    let mesh = MeshInput { spacing_scale: Some(&scale), ..MeshInput::new(&positions, &indices) };
+    let t = Instant::now();
+    let sys = System::new(&Config { target_feathers: 94, threads: 1, ..Config::default() }, &mesh).unwrap();
+    let secs = t.elapsed().as_secs_f64();
+    eprintln!("tube: {} feathers in {secs:.2} s", sys.feather_count());
+    assert!(sys.feather_count() > 0);
+    assert!(secs < 10.0, "{secs:.1} s");
+}
+
 /// Found by `fuzz_create`: a spacing of f32::MAX planted one feather whose
 /// triangles were NaN. Lengths beyond `MAX_COORDINATE` are refused; at the
 /// limit the feathers are finite.
