@@ -137,6 +137,7 @@ pub fn run(target: &str, default_cases: u64, mut case: impl FnMut(&mut Rng, &mut
             continue;
         }
         let mut rng = Rng::new(seed ^ i.wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let rss_before = peak_rss_kib();
         let t = Instant::now();
         if let Err(payload) = catch_unwind(AssertUnwindSafe(|| case(&mut rng, &mut tally))) {
             eprintln!(
@@ -147,6 +148,12 @@ pub fn run(target: &str, default_cases: u64, mut case: impl FnMut(&mut Rng, &mut
         let s = t.elapsed().as_secs_f64();
         if s > 2.0 {
             eprintln!("{target}: case {i} took {s:.1} s");
+        }
+        // The process's peak only rises: name the case that raised it by
+        // more than 256 MiB (a long run's peak otherwise names no input).
+        let rss_after = peak_rss_kib();
+        if rss_after > rss_before + (256 << 10) {
+            eprintln!("{target}: case {i} raised the peak RSS from {} to {} MiB", rss_before >> 10, rss_after >> 10);
         }
         if s > slowest {
             (slowest, slowest_case) = (s, i);
