@@ -187,22 +187,23 @@ impl Scene {
         CandidateLists::new(&self.offsets, &self.candidates)
     }
 
+    /// An ordered run over the scene with `params` and `steps`.
+    fn ordered<'a>(&'a self, params: &'a AdjustParams, steps: AdjustSteps) -> OrderedRun<'a> {
+        OrderedRun {
+            frames: &self.frames,
+            shapes: &self.shapes,
+            order: &self.order,
+            rank: &self.rank,
+            candidates: self.lists(),
+            body: &self.body,
+            params,
+            steps,
+        }
+    }
+
     fn adjust(&self, params: &AdjustParams) -> (Vec<FeatherPose>, plumage::adjustment::AdjustStats) {
         let mut poses = vec![FeatherPose::default(); self.frames.len()];
-        let stats = adjust_in_order(
-            &OrderedRun {
-                frames: &self.frames,
-                shapes: &self.shapes,
-                order: &self.order,
-                rank: &self.rank,
-                candidates: self.lists(),
-                body: &self.body,
-                params,
-                steps: AdjustSteps::Full,
-            },
-            &mut poses,
-            None,
-        );
+        let stats = adjust_in_order(&self.ordered(params, AdjustSteps::Full), &mut poses, None);
         (poses, stats)
     }
 
@@ -592,20 +593,7 @@ fn readjust_stats(
     poses: &mut [FeatherPose],
     selection: Selection<'_>,
 ) -> AdjustStats {
-    adjuster.adjust_in_order(
-        &OrderedRun {
-            frames: &scene.frames,
-            shapes: &scene.shapes,
-            order: &scene.order,
-            rank: &scene.rank,
-            candidates: scene.lists(),
-            body: &scene.body,
-            params: &AdjustParams::default(),
-            steps: AdjustSteps::Full,
-        },
-        poses,
-        selection,
-    )
+    adjuster.adjust_in_order(&scene.ordered(&AdjustParams::default(), AdjustSteps::Full), poses, selection)
 }
 
 /// As [`readjust_stats`], returning the number of feathers adjusted.
@@ -701,20 +689,7 @@ fn fine_pitch_only_keeps_roll_and_stays_clean() {
     let (mut poses, _) = scene.adjust(&params);
     let rolls: Vec<f32> = poses.iter().map(|p| p.roll).collect();
     let mut adjuster = Adjuster::new();
-    adjuster.adjust_in_order(
-        &OrderedRun {
-            frames: &scene.frames,
-            shapes: &scene.shapes,
-            order: &scene.order,
-            rank: &scene.rank,
-            candidates: scene.lists(),
-            body: &scene.body,
-            params: &params,
-            steps: AdjustSteps::FinePitchOnly,
-        },
-        &mut poses,
-        Selection::All,
-    );
+    adjuster.adjust_in_order(&scene.ordered(&params, AdjustSteps::FinePitchOnly), &mut poses, Selection::All);
     assert_eq!(poses.iter().map(|p| p.roll).collect::<Vec<_>>(), rolls);
     assert_clean("fine pitch", &scene.validate(&poses, 100));
 }
@@ -770,20 +745,7 @@ fn warm_scratch_allocates_nothing() {
         (0..3)
             .map(|_| {
                 let before = allocations_on_this_thread();
-                adjuster.adjust_in_order(
-                    &OrderedRun {
-                        frames: &scene.frames,
-                        shapes: &scene.shapes,
-                        order: &scene.order,
-                        rank: &scene.rank,
-                        candidates: scene.lists(),
-                        body: &scene.body,
-                        params: &params,
-                        steps: AdjustSteps::Full,
-                    },
-                    &mut poses,
-                    Selection::All,
-                );
+                adjuster.adjust_in_order(&scene.ordered(&params, AdjustSteps::Full), &mut poses, Selection::All);
                 allocations_on_this_thread() - before
             })
             .collect()
