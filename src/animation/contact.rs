@@ -172,7 +172,6 @@ pub struct Contacts {
     shadows: Vec<Shadow>,
     spheres: Vec<Sphere>,
     reach2: Vec<Reach2>,
-    owner: Vec<u32>,
     touch: Vec<u8>,
     offsets: Vec<u32>,
     indices: Vec<u32>,
@@ -217,19 +216,16 @@ impl Contacts {
                 *r2 = Reach2 { centre: s.centre, touch: s.radius * s.radius, near: grown * grown };
                 *shadow = Shadow::of(&footprints[i], &frames[i]);
             });
-        self.owner.clear();
-        for i in 0..n {
-            let len = (offsets[i + 1] - offsets[i]) as usize;
-            self.owner.extend(std::iter::repeat_n(i as u32, len));
-        }
-        let (shadows, reach2, owner) = (&self.shadows, &self.reach2, &self.owner);
+        let (shadows, reach2) = (&self.shadows, &self.reach2);
         self.touch.resize(indices.len(), APART);
         self.touch.par_chunks_mut(ENTRY_CHUNK).enumerate().for_each(|(chunk, out)| {
             let base = chunk * ENTRY_CHUNK;
-            let entries = owner[base..base + out.len()].iter().zip(&indices[base..base + out.len()]);
-            for (t, (&i, &j)) in out.iter_mut().zip(entries) {
-                *t = if rank[j as usize] < rank[i as usize] { touch(shadows, reach2, i, j) } else { UNKNOWN };
-            }
+            for_each_row_part(offsets, base..base + out.len(), |i, part| {
+                let rank_i = rank[i];
+                for (t, &j) in out[part.start - base..part.end - base].iter_mut().zip(&indices[part]) {
+                    *t = if rank[j as usize] < rank_i { touch(shadows, reach2, i as u32, j) } else { UNKNOWN };
+                }
+            });
         });
     }
 
@@ -322,6 +318,31 @@ impl Contacts {
     /// The flags of the last [`missed`](Self::missed).
     pub fn missed_flags(&self) -> &[bool] {
         &self.missed
+    }
+}
+
+/// Calls `f(i, part)` for every row `i` (of the CSR `offsets`) holding
+/// entries of `entries`, in order, with `part` the entries of the row
+/// that lie in `entries`.
+fn for_each_row_part(
+    offsets: &[u32],
+    entries: std::ops::Range<usize>,
+    mut f: impl FnMut(usize, std::ops::Range<usize>),
+) {
+    if entries.is_empty() {
+        return;
+    }
+    // The last row starting at or before the first entry (rows before it
+    // may be empty and start there too).
+    let mut i = offsets.partition_point(|&o| o as usize <= entries.start) - 1;
+    let mut at = entries.start;
+    while at < entries.end {
+        let end = (offsets[i + 1] as usize).min(entries.end);
+        if end > at {
+            f(i, at..end);
+            at = end;
+        }
+        i += 1;
     }
 }
 
