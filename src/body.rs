@@ -88,6 +88,18 @@ impl BodyIndex {
     pub fn closest_point(&self, p: Vec3, max_distance: f32, scratch: &mut Vec<u32>) -> Option<ClosestPoint> {
         self.grid.closest_point(p, max_distance, scratch)
     }
+
+    /// [`TriangleGrid::closest_point_keeping`] over the body.
+    pub fn closest_point_keeping(
+        &self,
+        p: Vec3,
+        max_distance: f32,
+        keep: impl Fn(f32) -> f32,
+        scratch: &mut Vec<u32>,
+        distances: &mut Vec<f32>,
+    ) -> Option<ClosestPoint> {
+        self.grid.closest_point_keeping(p, max_distance, keep, scratch, distances)
+    }
 }
 
 #[cfg(test)]

@@ -42,6 +42,12 @@ impl Aabb {
         Self { min: p - Vec3::splat(r), max: p + Vec3::splat(r) }
     }
 
+    /// Distance from `p` to the closed box (0 inside).
+    #[inline]
+    pub fn distance_to(&self, p: Vec3) -> f32 {
+        (self.min - p).max(p - self.max).max(Vec3::ZERO).length()
+    }
+
     /// Whether the box is a single point (a collapsed triangle's).
     #[inline]
     pub fn is_point(&self) -> bool {
@@ -398,6 +404,44 @@ impl TriangleGrid {
         for &t in scratch.iter() {
             let q = closest_point_on_triangle(p, self.corners[t as usize]);
             let d = (q - p).length();
+            if d <= max_distance && best.is_none_or(|b| d < b.distance || (d == b.distance && t < b.triangle)) {
+                best = Some(ClosestPoint { distance: d, triangle: t, point: q });
+            }
+        }
+        best
+    }
+
+    /// As [`closest_point`](Self::closest_point), also leaving in
+    /// `distances[k]` the distance of `scratch[k]`'s nearest point, as
+    /// `closest_point` measures it, for every triangle that may lie within
+    /// `keep(best)` of `p` (`best` the smallest distance found so far;
+    /// `keep` must not decrease as `best` grows); the others, which a box
+    /// test puts farther than that, get `f32::INFINITY` without their
+    /// nearest point being computed. The same answer as `closest_point`.
+    pub fn closest_point_keeping(
+        &self,
+        p: Vec3,
+        max_distance: f32,
+        keep: impl Fn(f32) -> f32,
+        scratch: &mut Vec<u32>,
+        distances: &mut Vec<f32>,
+    ) -> Option<ClosestPoint> {
+        self.query_box(&Aabb::around(p, max_distance), scratch);
+        distances.clear();
+        let mut best: Option<ClosestPoint> = None;
+        // The box's distance is a lower bound of the computed one up to
+        // the rounding of the nearest point (f64, stored as f32), which
+        // this margin covers many times over.
+        let margin = 1e-5 * p.abs().max_element();
+        for &t in scratch.iter() {
+            let bound = keep(best.map_or(max_distance, |b| b.distance));
+            if self.boxes[t as usize].distance_to(p) > bound * (1.0 + 1e-5) + margin {
+                distances.push(f32::INFINITY);
+                continue;
+            }
+            let q = closest_point_on_triangle(p, self.corners[t as usize]);
+            let d = (q - p).length();
+            distances.push(d);
             if d <= max_distance && best.is_none_or(|b| d < b.distance || (d == b.distance && t < b.triangle)) {
                 best = Some(ClosestPoint { distance: d, triangle: t, point: q });
             }

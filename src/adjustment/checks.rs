@@ -232,8 +232,7 @@ pub(super) fn boxes_clear(
     if meets_obstacle(mine, obstacles, false, &mut hints.obstacle) {
         return false;
     }
-    let (part, ids) = (&mut scratch.check_part, &mut scratch.body_ids);
-    if mine.penetrates_body(frame, shape, pose, body, part, ids, &mut hints.body) {
+    if mine.penetrates_body(frame, shape, pose, body, &mut scratch.body_scratch, &mut hints.body) {
         return false;
     }
     !(tops && meets_obstacle(mine, obstacles, true, &mut hints.top))

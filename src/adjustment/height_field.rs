@@ -34,6 +34,7 @@
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::{FeatherShape, FeatherTriangles};
 use crate::geometry::RootFrame;
+use crate::validation::BodyScratch;
 use glam::{Mat3A, Vec2, Vec3, Vec3A};
 
 /// Body triangles whose unit normal has a smaller component along the
@@ -147,11 +148,9 @@ pub struct HeightField {
     pub(crate) first_col: usize,
     /// Per-row shaft interval covered by the kite (scratch of the steps).
     pub(crate) row_span: Vec<[f32; 2]>,
-    /// Body triangle ids of the last query.
-    pub(crate) body_ids: Vec<u32>,
-    /// Scratch of the exact check of a chosen pose: the feather's part
-    /// beyond its root socket.
-    pub(crate) check_part: Vec<[Vec3; 3]>,
+    /// Scratch of the body queries and of the exact body test of a
+    /// chosen pose.
+    pub(crate) body_scratch: BodyScratch,
     /// Scratch of the exact checks of one feather: its obstacles' boxes
     /// when the caller gives none.
     pub(crate) boxes: Vec<super::obstacle::ObstacleBoxes>,
@@ -188,8 +187,7 @@ impl HeightField {
             inv_far: Vec::new(),
             first_col: 0,
             row_span: Vec::new(),
-            body_ids: Vec::new(),
-            check_part: Vec::new(),
+            body_scratch: BodyScratch::default(),
             boxes: Vec::new(),
             sweep_obstacles: Vec::new(),
             local_obstacles: Vec::new(),
@@ -333,7 +331,7 @@ impl HeightField {
         let reach = self.shape.length + self.dx;
         let band = SKIN_BAND_PER_LENGTH * self.shape.length;
         let map = LocalMap::new(frame);
-        let mut ids = std::mem::take(&mut self.body_ids);
+        let mut ids = std::mem::take(&mut self.body_scratch.ids);
         let band_box = self.world_bounds(frame, self.body_floor, band);
         body.triangles_in_box(&band_box, &mut ids);
         let mut rises = false;
@@ -359,7 +357,7 @@ impl HeightField {
                 }
             }
         }
-        self.body_ids = ids;
+        self.body_scratch.ids = ids;
     }
 
     /// World bounding box of the footprint between heights `z_lo` and `z_hi`.

@@ -83,26 +83,32 @@ pub fn body_penetrations(
 ) -> Vec<u32> {
     let hits: Vec<bool> = (0..frames.len())
         .into_par_iter()
-        .map_init(
-            || (Vec::new(), Vec::new()),
-            |(part, ids), i| penetrates_body(&frames[i], &shapes[i], poses[i], body, part, ids),
-        )
+        .map_init(BodyScratch::default, |scratch, i| penetrates_body(&frames[i], &shapes[i], poses[i], body, scratch))
         .collect();
     hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
 }
 
 /// Whether one feather penetrates the body more than 5 % of its length from
-/// the root (the test of [`body_penetrations`]). `part` and `ids` are
-/// scratch buffers.
+/// the root (the test of [`body_penetrations`]).
 pub(crate) fn penetrates_body(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
     body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
+    scratch: &mut BodyScratch,
 ) -> bool {
-    penetrates_body_hinted(frame, shape, pose, body, part, ids, &mut None)
+    penetrates_body_hinted(frame, shape, pose, body, scratch, &mut None)
+}
+
+/// Scratch buffers of the body test of one feather.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BodyScratch {
+    /// The feather's part beyond its root socket.
+    pub(crate) part: Vec<[Vec3; 3]>,
+    /// Body triangle ids of the last query.
+    pub(crate) ids: Vec<u32>,
+    /// The distances of a nearest-skin search (see [`side_of_skin`]).
+    distances: Vec<f32>,
 }
 
 /// [`penetrates_body`], testing body triangle `hint` first (when the
@@ -114,28 +120,26 @@ pub(crate) fn penetrates_body_hinted(
     shape: &FeatherShape,
     pose: FeatherPose,
     body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
+    scratch: &mut BodyScratch,
     hint: &mut Option<u32>,
 ) -> bool {
     let tris = crate::feather::feather_triangles(frame, shape, pose);
     let plane = FlatPlane::of_straight_feather(frame, shape, pose);
-    penetrates_body_posed(frame, shape, pose, (&tris, plane), body, part, ids, hint)
+    penetrates_body_posed(frame, shape, pose, (&tris, plane), body, scratch, hint)
 }
 
 /// [`penetrates_body_hinted`] given the feather's triangles at `pose` and
 /// its plane.
-#[allow(clippy::too_many_arguments)]
 fn penetrates_body_posed(
     frame: &RootFrame,
     shape: &FeatherShape,
     pose: FeatherPose,
     (tris, plane): (&[[Vec3; 3]], Option<FlatPlane>),
     body: &BodyIndex,
-    part: &mut Vec<[Vec3; 3]>,
-    ids: &mut Vec<u32>,
+    scratch: &mut BodyScratch,
     hint: &mut Option<u32>,
 ) -> bool {
+    let BodyScratch { part, ids, distances } = scratch;
     if pose.scale <= 0.0 {
         // A feather left out (size 0) is a point on the skin.
         return false;
@@ -195,7 +199,7 @@ fn penetrates_body_posed(
         {
             return s;
         }
-        let s = side_of_skin(body, p, shape.length, ids);
+        let s = side_of_skin(body, p, shape.length, ids, distances);
         if count < judged.len() {
             judged[count] = (p, s);
             count += 1;
@@ -252,18 +256,16 @@ impl FeatherBoxes {
     /// [`penetrates_body_hinted`] for the feather and pose these boxes were
     /// made of with [`FeatherBoxes::of_feather`] (its triangles and plane
     /// made once for both tests).
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn penetrates_body(
         &self,
         frame: &RootFrame,
         shape: &FeatherShape,
         pose: FeatherPose,
         body: &BodyIndex,
-        part: &mut Vec<[Vec3; 3]>,
-        ids: &mut Vec<u32>,
+        scratch: &mut BodyScratch,
         hint: &mut Option<u32>,
     ) -> bool {
-        penetrates_body_posed(frame, shape, pose, (&self.triangles, self.plane), body, part, ids, hint)
+        penetrates_body_posed(frame, shape, pose, (&self.triangles, self.plane), body, scratch, hint)
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
@@ -414,10 +416,20 @@ impl BoxedTriangles {
 /// point by the normals of every face at the nearest distance, summed, so
 /// that edges and corners of the skin judge by all their faces. The search
 /// starts small and widens, since feather corners are usually near skin.
-fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -> Option<bool> {
+/// Faces that a box test puts beyond the tie distance of the nearest found
+/// so far are not measured (they could be neither nearest nor tied).
+fn side_of_skin(
+    body: &BodyIndex,
+    p: Vec3,
+    reach: f32,
+    scratch: &mut Vec<u32>,
+    distances: &mut Vec<f32>,
+) -> Option<bool> {
+    let tolerance = 1e-6 * reach.max(p.abs().max_element());
+    let tie = |nearest: f32| nearest * (1.0 + 1e-4) + tolerance;
     let mut radius = reach / 64.0;
     let nearest = loop {
-        if let Some(n) = body.closest_point(p, radius, scratch) {
+        if let Some(n) = body.closest_point_keeping(p, radius, tie, scratch, distances) {
             break n;
         }
         if radius >= reach {
@@ -425,16 +437,12 @@ fn side_of_skin(body: &BodyIndex, p: Vec3, reach: f32, scratch: &mut Vec<u32>) -
         }
         radius = (radius * 4.0).min(reach);
     };
-    let tolerance = 1e-6 * reach.max(p.abs().max_element());
     if nearest.distance <= tolerance {
         return None;
     }
-    let tie = nearest.distance * (1.0 + 1e-4) + tolerance;
-    let normal: Vec3 = scratch
-        .iter()
-        .filter(|&&t| (crate::triangle_grid::closest_point_on_triangle(p, body.corners(t)) - p).length() <= tie)
-        .map(|&t| body.normal(t))
-        .sum();
+    let tie = tie(nearest.distance);
+    let normal: Vec3 =
+        scratch.iter().zip(distances.iter()).filter(|&(_, &d)| d <= tie).map(|(&t, _)| body.normal(t)).sum();
     Some((p - nearest.point).dot(normal) < 0.0)
 }
 

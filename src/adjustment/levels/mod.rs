@@ -8,6 +8,15 @@
 //! feather of its own level, so running each level in parallel gives
 //! exactly the serial result, whatever the thread count. Effects are applied
 //! after each level, in a fixed order.
+//!
+//! A verifying frame (every feather whose surroundings moved is checked
+//! where it lies) puts nearly every feather in scope, and the obstacle
+//! relation runs through thousands of levels of a feather or two. Its
+//! checks are made ahead, in parallel; when that leaves few feathers to
+//! adjust, the run walks the order one feather after another instead,
+//! visiting only the feathers with something to do and, through the
+//! obstacle rows' transpose, what lies on a feather it changed. Same
+//! poses either way.
 
 use super::checks::bounding_sphere;
 use super::obstacle::ObstacleBoxes;
@@ -29,6 +38,21 @@ use visit::{Inputs, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_cle
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
+/// A verifying run walks the order instead of running levels when fewer
+/// than one feather in this many is left to adjust after the checks made
+/// ahead.
+const WALK_SHARE: usize = 64;
+
+/// How a run visits feathers one after another along the order, and
+/// where it finds what lies on a feather it changed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Walk {
+    /// Over symmetric candidate rows (a step's second pass): the later
+    /// feathers of a feather's own row.
+    Symmetric,
+    /// Over obstacle rows: the feathers listing it, from their transpose.
+    Transposed,
+}
 /// Figures of one ordered adjustment.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AdjustStats {
@@ -87,6 +111,14 @@ pub struct Adjuster {
     /// The feathers checked ahead, in order.
     precheck_items: Vec<u32>,
     precheck_outcomes: Vec<Precheck>,
+    /// The transpose of the candidate rows of a walk over obstacle rows:
+    /// the feathers listing each feather.
+    dependent_offsets: Vec<u32>,
+    dependents: Vec<u32>,
+    /// Tests only: replaces [`WALK_SHARE`] (0 always walks, `usize::MAX`
+    /// never does).
+    #[cfg(test)]
+    walk_share: Option<usize>,
 }
 
 impl Adjuster {
@@ -228,13 +260,6 @@ impl Adjuster {
             Selection::All => {}
         }
         self.posed_triangles(frames, shapes, poses);
-        let levels = if sparse {
-            self.mark_selected(n, selection);
-            0
-        } else {
-            self.mark_scope(order, rank, candidates, selection);
-            self.assign_levels(order, rank, candidates)
-        };
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
@@ -245,7 +270,7 @@ impl Adjuster {
         let triangles = body.triangle_count();
         self.workers
             .iter_mut()
-            .for_each(|w| w.field.body_ids.reserve(triangles.saturating_sub(w.field.body_ids.len())));
+            .for_each(|w| w.field.body_scratch.ids.reserve(triangles.saturating_sub(w.field.body_scratch.ids.len())));
         self.moved.clear();
         self.moved.resize(n, false);
         self.changed.clear();
@@ -257,15 +282,36 @@ impl Adjuster {
         self.settling.clear();
         self.settling.resize(n, false);
 
-        let mut stats = AdjustStats { levels, ..AdjustStats::default() };
+        let mut stats = AdjustStats::default();
         let inputs =
             Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only, settle_rate };
         self.prechecked.clear();
         self.prechecked.resize(n, Precheck::None);
-        if !sparse && rayon::current_num_threads() > 1 {
+        // Verifying by levels, the suspects are checked ahead first; when
+        // that leaves few feathers to adjust, a walk along the order that
+        // visits only them and what they change costs less than the levels
+        // (thousands of them, most holding a feather or two). Either way
+        // gives the same poses; the choice depends on the checks' answers
+        // only, never on the thread count.
+        let mut walk = sparse.then_some(Walk::Symmetric);
+        if !sparse && let Selection::Verify { seeds, .. } = selection {
+            self.mark_selected(n, selection);
             self.precheck(&inputs, order, poses);
+            let blocked = self.prechecked.iter().filter(|&&p| p == Precheck::Blocked).count();
+            let to_adjust = seeds.iter().filter(|&&s| s).count() + blocked;
+            #[cfg(test)]
+            let share = self.walk_share.unwrap_or(WALK_SHARE);
+            #[cfg(not(test))]
+            let share = WALK_SHARE;
+            if to_adjust.saturating_mul(share) < n {
+                self.transpose(candidates);
+                walk = Some(Walk::Transposed);
+            }
         }
-        if sparse {
+        if let Some(walk) = walk {
+            if walk == Walk::Symmetric {
+                self.mark_selected(n, selection);
+            }
             for (k, &i) in order.iter().enumerate() {
                 if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
                     return None;
@@ -280,17 +326,28 @@ impl Adjuster {
                 self.apply(i, &visit, &inputs, poses, &mut stats);
                 if self.changed[i] {
                     // What lies on it may now meet it or stand on nothing.
-                    for &j in candidates.of(i) {
+                    let dependents = match walk {
+                        Walk::Symmetric => candidates.of(i),
+                        Walk::Transposed => CandidateLists::new(&self.dependent_offsets, &self.dependents).of(i),
+                    };
+                    for &j in dependents {
                         if rank[j as usize] > rank[i] {
                             self.in_scope[j as usize] = true;
                         }
                     }
                 }
             }
-            stats.levels = usize::from(stats.adjusted + stats.verified > 0);
+            stats.levels = match walk {
+                Walk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
+                // The checks ahead, then one feather adjusted after another.
+                Walk::Transposed => 1 + stats.adjusted,
+            };
             stats.seconds = start.elapsed().as_secs_f64();
             return Some(stats);
         }
+        self.mark_scope(order, rank, candidates, selection);
+        stats.levels = self.assign_levels(order, rank, candidates);
+        let levels = stats.levels;
         for l in 0..levels {
             if !keep_going(l as f32 / levels.max(1) as f32) {
                 return None;
@@ -351,6 +408,33 @@ impl Adjuster {
         for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
             self.prechecked[i as usize] = outcome;
         }
+    }
+
+    /// The transpose of `candidates` into the dependents: row j lists the
+    /// feathers whose candidates list j, in increasing order.
+    fn transpose(&mut self, candidates: CandidateLists<'_>) {
+        let n = candidates.len();
+        let starts = &mut self.dependent_offsets;
+        starts.clear();
+        starts.resize(n + 1, 0);
+        (0..n).flat_map(|i| candidates.of(i)).for_each(|&j| starts[j as usize] += 1);
+        let mut total = 0;
+        for s in starts.iter_mut() {
+            (*s, total) = (total, total + *s);
+        }
+        // Filled through the starts, which then hold each row's end: the
+        // start of the next.
+        self.dependents.clear();
+        self.dependents.resize(total as usize, 0);
+        for i in 0..n {
+            for &j in candidates.of(i) {
+                let at = &mut starts[j as usize];
+                self.dependents[*at as usize] = i as u32;
+                *at += 1;
+            }
+        }
+        starts.copy_within(0..n, 1);
+        starts[0] = 0;
     }
 
     /// Records what became of feather `i`; an adjusted feather takes its

@@ -164,7 +164,8 @@ fn a_bent_feather_follows_a_slowly_rising_obstacle_without_popping() {
 
 /// A sparse run gives the poses, adjusted and verified flags of a run
 /// by levels over the same symmetric candidates; by levels, the checks
-/// made ahead on several threads change nothing either.
+/// made ahead on several threads change nothing either, nor does a
+/// verifying run's walk along the order.
 #[test]
 fn a_sparse_run_matches_the_levels() {
     let mut rng = Rng::new(7);
@@ -212,6 +213,15 @@ fn a_sparse_run_matches_the_levels() {
         params: &params,
         steps: AdjustSteps::Full,
     };
+    // The earlier candidates alone, as a frame's obstacle rows hold them
+    // (a relation that is not symmetric).
+    let mut earlier_offsets = vec![0u32];
+    let mut earlier_indices = Vec::new();
+    for i in 0..n {
+        earlier_indices.extend(candidates.of(i).iter().filter(|&&j| rank[j as usize] < rank[i]));
+        earlier_offsets.push(earlier_indices.len() as u32);
+    }
+    let earlier_only = OrderedRun { candidates: CandidateLists::new(&earlier_offsets, &earlier_indices), ..ordered };
     let all = adjuster.adjust_in_order(&ordered, &mut start, Selection::All);
     assert_eq!(all.adjusted, n);
     let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
@@ -232,13 +242,25 @@ fn a_sparse_run_matches_the_levels() {
             Selection::Verify { seeds: &seeds, suspects: &suspects, threshold },
             Selection::Propagate { seeds: &seeds, threshold },
         ] {
-            let run = |sparse: bool, pairs_only: bool| {
-                let mut adjuster = Adjuster::new();
+            let run_on = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, walk_share: usize| {
+                let mut adjuster = Adjuster { walk_share: Some(walk_share), ..Adjuster::new() };
                 let mut poses = poses.clone();
-                let stats =
-                    adjuster.ordered_run(&ordered, &mut poses, selection, &|_| true, (sparse, pairs_only)).unwrap();
+                let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, (sparse, pairs_only)).unwrap();
                 (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
             };
+            let run = |sparse: bool, pairs_only: bool| run_on(&ordered, sparse, pairs_only, usize::MAX);
+            if matches!(selection, Selection::Verify { .. }) {
+                // Verifying, a walk along the order over the obstacle rows'
+                // transpose instead of the levels (forced here whatever is
+                // left to adjust): the same result, over the full rows or
+                // the earlier candidates alone.
+                for rows in [&ordered, &earlier_only] {
+                    let by_levels = run_on(rows, false, false, usize::MAX);
+                    for t in &threads {
+                        assert_eq!(t.install(|| run_on(rows, false, false, 0)), by_levels, "round {round}");
+                    }
+                }
+            }
             for pairs_only in [false, true] {
                 // By levels on three threads, which checks the suspects
                 // ahead (Adjuster::precheck), and on one, which does not.
