@@ -33,6 +33,8 @@ const POSE_MARGIN: f32 = 0.2;
 const FOOTPRINT_SLACK: f32 = 0.1;
 /// Candidate entries per parallel work item.
 const ENTRY_CHUNK: usize = 4096;
+/// Blocks of rows [`Contacts::obstacle_rows`] fills in parallel.
+const ROW_BLOCKS: usize = 64;
 
 /// A conservative rectangle around a feather's height-field footprint, in
 /// its frame (x along the shaft, y across).
@@ -252,28 +254,62 @@ impl Contacts {
     /// footprint or come within the pose margin of it.
     pub fn obstacle_rows(&mut self, candidates: Candidates<'_>) -> (&[u32], &[u32]) {
         let Candidates { offsets, indices, rank } = candidates;
+        let n = offsets.len().saturating_sub(1);
         self.offsets.clear();
-        self.offsets.push(0);
-        // Written without branching on the (unpredictable) tests; sized for
-        // every candidate, so the buffer never creeps up with the poses.
-        self.indices.resize(indices.len(), 0);
-        let mut len = 0;
-        let (shadows, reach2) = (&self.shadows, &self.reach2);
-        for i in 0..offsets.len().saturating_sub(1) {
-            let rank_i = rank[i];
-            let row = offsets[i] as usize..offsets[i + 1] as usize;
-            for (&j, t) in indices[row.clone()].iter().zip(&mut self.touch[row]) {
-                let earlier = rank[j as usize] < rank_i;
-                if (*t == UNKNOWN) & earlier {
-                    // Earlier now, later when the contacts were worked out:
-                    // a reversal or a new pair of this frame (rare).
-                    *t = touch(shadows, reach2, i as u32, j);
-                }
-                self.indices[len] = j;
-                len += usize::from((*t != APART) & earlier);
-            }
-            self.offsets.push(len as u32);
+        self.offsets.resize(n + 1, 0);
+        if n == 0 {
+            return (&self.offsets, &[]);
         }
+        // Sized for every candidate, so the buffer never creeps up with the
+        // poses.
+        self.indices.resize(indices.len(), 0);
+        let (shadows, reach2) = (&self.shadows, &self.reach2);
+        // Blocks of rows in parallel, each with its entries' states, its
+        // rows' lengths and, to write its kept candidates into, the place
+        // its candidates hold; then the blocks close up, in order.
+        let (mut states, mut out, mut lengths) =
+            (&mut self.touch[..indices.len()], &mut self.indices[..], &mut self.offsets[1..]);
+        let blocks: [_; ROW_BLOCKS] = std::array::from_fn(|b| {
+            let rows = n * b / ROW_BLOCKS..n * (b + 1) / ROW_BLOCKS;
+            let size = (offsets[rows.end] - offsets[rows.start]) as usize;
+            let (s, s_rest) = std::mem::take(&mut states).split_at_mut(size);
+            let (o, o_rest) = std::mem::take(&mut out).split_at_mut(size);
+            let (l, l_rest) = std::mem::take(&mut lengths).split_at_mut(rows.len());
+            (states, out, lengths) = (s_rest, o_rest, l_rest);
+            (rows, s, o, l)
+        });
+        blocks.into_par_iter().for_each(|(rows, states, out, lengths)| {
+            let base = offsets[rows.start] as usize;
+            let mut len = 0;
+            for (i, length) in rows.zip(lengths.iter_mut()) {
+                let rank_i = rank[i];
+                let row = offsets[i] as usize..offsets[i + 1] as usize;
+                let before = len;
+                for (&j, t) in indices[row.clone()].iter().zip(&mut states[row.start - base..row.end - base]) {
+                    let earlier = rank[j as usize] < rank_i;
+                    if (*t == UNKNOWN) & earlier {
+                        // Earlier now, later when the contacts were worked
+                        // out: a reversal or a new pair of this frame (rare).
+                        *t = touch(shadows, reach2, i as u32, j);
+                    }
+                    // Written without branching on the (unpredictable) tests.
+                    out[len] = j;
+                    len += usize::from((*t != APART) & earlier);
+                }
+                *length = (len - before) as u32;
+            }
+        });
+        for i in 0..n {
+            self.offsets[i + 1] += self.offsets[i];
+        }
+        for b in 0..ROW_BLOCKS {
+            let rows = n * b / ROW_BLOCKS..n * (b + 1) / ROW_BLOCKS;
+            let (from, to) = (offsets[rows.start] as usize, self.offsets[rows.start] as usize);
+            let len = (self.offsets[rows.end] as usize) - to;
+            // Never past the candidates of a block yet to close up.
+            self.indices.copy_within(from..from + len, to);
+        }
+        let len = self.offsets[n] as usize;
         (&self.offsets, &self.indices[..len])
     }
 
