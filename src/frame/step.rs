@@ -361,10 +361,11 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
         return;
     }
     let (frames, poses, shapes) = (&coat.frames, &coat.poses, &dressing.shapes);
-    step.spheres.clear();
-    step.spheres.extend((0..n).map(|j| Sphere::of(&frames[j], &shapes[j], poses[j])));
-    step.orientations.clear();
-    step.orientations.extend(frames.iter().map(orientation));
+    step.spheres.resize(n, Sphere::default());
+    step.spheres.par_iter_mut().enumerate().with_min_len(256).for_each(|(j, s)| {
+        *s = Sphere::of(&frames[j], &shapes[j], poses[j]);
+    });
+    orientations_into(frames, &mut step.orientations);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
     let oriented = |j: usize| Oriented { frame: &frames[j], orientation: step.orientations[j] };
@@ -387,6 +388,12 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
     }
 }
 
+/// Every root frame's orientation, into `out`, in parallel.
+fn orientations_into(frames: &[RootFrame], out: &mut Vec<glam::Quat>) {
+    out.resize(frames.len(), glam::Quat::IDENTITY);
+    out.par_iter_mut().zip(frames).with_min_len(256).for_each(|(q, f)| *q = orientation(f));
+}
+
 /// For each feather, how far its surroundings moved relative to it since
 /// the last frame (`displacement`): over its k nearest roots j, the
 /// displacement at the distance between the roots (what their priority
@@ -403,7 +410,7 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
     step.net.resize(n, 0.0);
     step.orientations.clear();
     if net {
-        step.orientations.extend(frames.iter().map(orientation));
+        orientations_into(frames, &mut step.orientations);
     }
     let orientations = &step.orientations;
     let oriented = |j: usize| Oriented { frame: &frames[j], orientation: orientations[j] };
