@@ -4,16 +4,17 @@
 //!
 //! 1. **pose** ([`Coat::pose`]): the welded positions → vertex normals and
 //!    every root's frame (`Coat::frames`); poses stay relative to them.
-//! 2. **neighbourhoods** (`phases::neighbourhoods`): root frames → the k
-//!    nearest roots, the symmetric pair set and the obstacle candidates
-//!    (`Coat::neighbourhoods`).
+//! 2. **neighbourhoods** (`phases::neighbourhoods_and_body`): root frames
+//!    → the k nearest roots, the symmetric pair set and the obstacle
+//!    candidates (`Coat::neighbourhoods`).
 //! 3. **order**: from scratch, `phases::static_order` (priorities of the
 //!    pairs → the priority DAG made acyclic → its topological order and
 //!    `Coat::ordering_report`); frame to frame, `step` (the roots whose
 //!    surroundings moved, `R_k` → their pairs' priorities → the dynamic
 //!    order's edge reversals with the cycle rule → `R*_k`).
 //! 4. **body** (`phases::body`): positions → the body index
-//!    (`Coat::body`) the adjustment and the checks query.
+//!    (`Coat::body`) the adjustment and the checks query. Wherever phase 2
+//!    runs, the body is indexed beside it (it needs only the positions).
 //! 5. **adjust** (the [`crate::adjustment`] API): from scratch every
 //!    feather in order, all three steps; frame to frame the seeds `R*_k` in
 //!    order, checked exactly or propagated past θs, then the missed

@@ -21,15 +21,6 @@ pub struct Workspace {
     pub orientations: Vec<Vec3>,
 }
 
-/// Phase 2, neighbourhoods: the k nearest roots, the pair set and the
-/// obstacle candidates at the coat's current root frames. Returns the
-/// seconds it took.
-pub(super) fn neighbourhoods(coat: &mut Coat, dressing: &Dressing) -> f64 {
-    let start = Instant::now();
-    coat.neighbourhoods.rebuild(&coat.frames, &dressing.reach, &dressing.neighbour_params);
-    start.elapsed().as_secs_f64()
-}
-
 /// Phase 3 from scratch, the static order: the priority difference of
 /// every pair (Eq. 3, or Eq. 2 with the feathers' current shaft directions
 /// for the legacy mode), then the priority DAG made acyclic and its
@@ -58,6 +49,24 @@ pub(super) fn static_order(coat: &mut Coat, dressing: &Dressing, work: &mut Work
         violations: report.violations,
         seconds: started.elapsed().as_secs_f64(),
     };
+}
+
+/// Phases 2 and 4 side by side (they read and write different parts of
+/// the coat): the neighbourhoods (the k nearest roots, the pair set and
+/// the obstacle candidates at the coat's current root frames) on the pool,
+/// the body index at the coat's positions beside them. Returns the seconds
+/// the neighbourhoods took.
+pub(super) fn neighbourhoods_and_body(coat: &mut Coat, dressing: &Dressing) -> f64 {
+    let Coat { neighbourhoods, frames, body, positions, .. } = coat;
+    let (seconds, ()) = rayon::join(
+        || {
+            let start = Instant::now();
+            neighbourhoods.rebuild(frames, &dressing.reach, &dressing.neighbour_params);
+            start.elapsed().as_secs_f64()
+        },
+        || body.rebuild(positions, &dressing.triangles),
+    );
+    seconds
 }
 
 /// Phase 4, body: the body's triangles at the coat's positions, indexed.

@@ -26,13 +26,12 @@ pub fn solve(
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     let order_start = Instant::now();
-    let neighbourhood_seconds = phases::neighbourhoods(coat, dressing);
+    let neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing);
     progress.check(Phase::Ordering, 0.5)?;
     coat.poses.clear();
     coat.poses.resize(dressing.len(), FeatherPose::default());
     phases::static_order(coat, dressing, work, order_start);
     progress.check(Phase::Adjusting, 0.0)?;
-    phases::body(coat, dressing);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let run = OrderedRun {
         frames: &coat.frames,

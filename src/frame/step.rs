@@ -136,8 +136,9 @@ pub fn step_coat(
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
     let mut neighbourhood_seconds = 0.0;
-    if incremental && dressing.config.recompute_neighbourhoods {
-        neighbourhood_seconds = phases::neighbourhoods(coat, dressing);
+    let body_indexed = incremental && dressing.config.recompute_neighbourhoods;
+    if body_indexed {
+        neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing);
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
@@ -193,7 +194,9 @@ pub fn step_coat(
     progress.check(Phase::Adjusting, 0.0)?;
 
     // 4. Readjust R*_k in order, propagating past θs.
-    phases::body(coat, dressing);
+    if !body_indexed {
+        phases::body(coat, dressing);
+    }
     if verify {
         watch_other_parts(coat, dressing, &mut step.suspects, &mut step.body_ids);
     }
