@@ -258,6 +258,9 @@ fn memo_cell_centre(c: usize) -> [f32; 3] {
 struct AliveSet {
     list: Vec<u32>,
     slot: Vec<u32>,
+    /// One bit per pool slot, set while the point is alive: a radius query
+    /// reads only the live points of a cell, in slot order.
+    bits: Vec<u64>,
     /// Per pool slot, its grid cell id.
     slot_cell: Vec<u32>,
     /// Per grid cell id, the points of it still alive.
@@ -272,7 +275,34 @@ impl AliveSet {
         let n = slot_cell.len();
         let mut cell_alive = vec![0u32; grid.cell_count()];
         slot_cell.iter().for_each(|&c| cell_alive[c as usize] += 1);
-        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect(), slot_cell, cell_alive }
+        let mut bits = vec![u64::MAX; n.div_ceil(64)];
+        if n % 64 != 0 {
+            *bits.last_mut().expect("n > 0") = (1u64 << (n % 64)) - 1;
+        }
+        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect(), bits, slot_cell, cell_alive }
+    }
+
+    /// The live points of slots `first..first + len`, word by word: calls
+    /// `f(self, slot)` for each in slot order. `f` may remove the point it
+    /// is given (the word is read before its points are visited).
+    #[inline]
+    fn for_each_in(&mut self, first: u32, len: u32, mut f: impl FnMut(&mut Self, u32)) {
+        let end = first + len;
+        let mut word = first / 64;
+        while word * 64 < end {
+            let lo = (word * 64).max(first);
+            let hi = (word * 64 + 64).min(end);
+            // Bits lo..hi of this word.
+            let span = hi - lo;
+            let mask = if span == 64 { u64::MAX } else { ((1u64 << span) - 1) << (lo - word * 64) };
+            let mut live = self.bits[word as usize] & mask;
+            while live != 0 {
+                let k = word * 64 + live.trailing_zeros();
+                live &= live - 1;
+                f(self, k);
+            }
+            word += 1;
+        }
     }
 
     #[inline]
@@ -292,6 +322,7 @@ impl AliveSet {
             return;
         }
         self.cell_alive[self.slot_cell[i as usize] as usize] -= 1;
+        self.bits[i as usize / 64] &= !(1u64 << (i % 64));
         let last = self.list.pop().expect("non-empty when an element is alive");
         if last != i {
             self.list[s as usize] = last;
@@ -475,9 +506,9 @@ impl<'a> DiskSampler<'a> {
             if alive.cell_is_empty(cell) {
                 return;
             }
-            for (k, at) in (first..).zip(slots) {
-                if (*at - p.position).length_squared() > reach2 || !alive.contains(k) {
-                    continue;
+            alive.for_each_in(first, slots.len() as u32, |alive, k| {
+                if (slots[(k - first) as usize] - p.position).length_squared() > reach2 {
+                    return;
                 }
                 let q = &points[k as usize];
                 let g = patch.geodesic_to(q.position, q.normal, q.face);
@@ -486,7 +517,7 @@ impl<'a> DiskSampler<'a> {
                 } else if g <= reach {
                     candidates.push(k);
                 }
-            }
+            });
         });
     }
 
