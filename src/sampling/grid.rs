@@ -4,6 +4,7 @@
 
 use crate::rng::mix64;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -56,9 +57,19 @@ impl Hasher for CellHasher {
 
 type CellMap<V> = HashMap<Cell, V, BuildHasherDefault<CellHasher>>;
 
+#[inline]
 fn cell_of(p: Vec3, inv_cell: f32) -> Cell {
-    let c = (p * inv_cell).floor();
-    Cell([c.x as i32, c.y as i32, c.z as i32])
+    let c = p * inv_cell;
+    Cell([floor_to_i32(c.x), floor_to_i32(c.y), floor_to_i32(c.z)])
+}
+
+/// `v.floor() as i32` (saturating, NaN → 0) without the library call that
+/// `floor` is on a baseline x86_64 target: truncate, then step down when
+/// that rounded up.
+#[inline]
+fn floor_to_i32(v: f32) -> i32 {
+    let t = v as i32;
+    if (t as f32) > v { t.saturating_sub(1) } else { t }
 }
 
 /// Number of cells in the box that [`for_each_cell`] walks (as f64: it can
@@ -247,13 +258,13 @@ impl StaticGrid {
         // stable sort on it alone groups cells and keeps index order inside.
         // The sort runs on the packed coordinates renumbered densely, in the
         // same order: (x · ny + y) · nz + z.
-        let cells: Vec<Cell> = positions.iter().map(|&p| cell_of(p - origin, inv_cell)).collect();
+        let cells: Vec<Cell> = positions.par_iter().map(|&p| cell_of(p - origin, inv_cell)).collect();
         let dims = cells.iter().fold([0u64; 3], |n, c| {
             let p = c.packed_coordinates();
             [n[0].max(p[0] + 1), n[1].max(p[1] + 1), n[2].max(p[2] + 1)]
         });
         let keys: Vec<u64> = cells
-            .iter()
+            .par_iter()
             .map(|c| {
                 let [x, y, z] = c.packed_coordinates();
                 (x * dims[1] + y) * dims[2] + z
@@ -283,7 +294,7 @@ impl StaticGrid {
         column_start.push(cell_z.len() as u32);
         cell_start.push(order.len() as u32);
         let columns = Self::column_index(&column_cells, positions.len(), z_sorted);
-        let positions = order.iter().map(|&i| positions[i as usize]).collect();
+        let positions = order.par_iter().map(|&i| positions[i as usize]).collect();
         Self { origin, inv_cell, columns, column_start, cell_z, z_sorted, cell_start, order, positions }
     }
 
@@ -462,6 +473,34 @@ mod tests {
         found.sort_unstable();
         let expected: Vec<u32> = (0..500).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
         assert_eq!(found, expected);
+    }
+
+    #[test]
+    fn floor_to_i32_is_floor_then_cast() {
+        let mut rng = Rng::new(3);
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            -1.0,
+            1.0,
+            -1e-30,
+            2147483520.0,
+            2147483648.0,
+            -2147483648.0,
+            -2147483904.0,
+            1e20,
+            -1e20,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+        ];
+        let random = (0..10_000).map(|_| (rng.next_f32() - 0.5) * 10f32.powi((rng.next_f32() * 12.0) as i32 - 3));
+        for v in special.into_iter().chain(random) {
+            assert_eq!(floor_to_i32(v), v.floor() as i32, "{v}");
+        }
     }
 
     /// The radix sort is the stable sort: equal keys keep index order, at

@@ -349,10 +349,10 @@ pub(crate) struct SortedPool {
 impl SortedPool {
     /// Sorts `drawn` into a grid of cell size `cell`.
     pub(crate) fn new(drawn: Vec<PoolPoint>, cell: f32) -> Self {
-        let positions: Vec<Vec3> = drawn.iter().map(|p| p.position).collect();
+        let positions: Vec<Vec3> = drawn.par_iter().map(|p| p.position).collect();
         let grid = StaticGrid::new(&positions, cell);
         let draw_index = grid.order().to_vec();
-        let points = draw_index.iter().map(|&i| drawn[i as usize]).collect();
+        let points = draw_index.par_iter().map(|&i| drawn[i as usize]).collect();
         Self { points, draw_index, grid }
     }
 
