@@ -12,6 +12,7 @@ use crate::field::Fields;
 use crate::geometry::SurfacePoint;
 use crate::interior::{BuriedSkin, FaceBurial};
 use crate::rng::Rng;
+use crate::surface::geodesic::SAME_FACING_COS;
 use crate::surface::{NearbyPatch, Surface};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -371,6 +372,38 @@ impl SortedPool {
     }
 }
 
+/// `G` from a pool point (the centre) to others within `radius`, as
+/// [`NearbyPatch::geodesic_to`] after a `gather` around the centre; the
+/// patch is gathered only once a point faces the other way, since `G` of
+/// points facing the same way is their chord (on a smooth skin, most
+/// queries never need the patch).
+struct LazyPatch<'p> {
+    patch: &'p mut NearbyPatch,
+    center: PoolPoint,
+    radius: f32,
+    gathered: bool,
+}
+
+impl<'p> LazyPatch<'p> {
+    fn new(patch: &'p mut NearbyPatch, center: PoolPoint, radius: f32) -> Self {
+        Self { patch, center, radius, gathered: false }
+    }
+
+    #[inline]
+    fn geodesic_to(&mut self, surface: &Surface, positions: &[Vec3], q: &PoolPoint) -> f32 {
+        let c = &self.center;
+        // The same test and chord as `NearbyPatch::geodesic_to`.
+        if c.normal.dot(q.normal) > SAME_FACING_COS {
+            return (q.position - c.position).length();
+        }
+        if !self.gathered {
+            self.patch.gather(surface, positions, c.face, c.position, c.normal, self.radius);
+            self.gathered = true;
+        }
+        self.patch.geodesic_to(q.position, q.normal, q.face)
+    }
+}
+
 /// Poisson-disk state shared by both samplers: the pool, what is left of
 /// it, and the samples placed so far (all by slot). Two points conflict
 /// when `G(p_i, p_j) ≤ max(d_i, d_j)`.
@@ -499,8 +532,9 @@ impl<'a> DiskSampler<'a> {
         self.samples.push(j);
         self.sample_grid.insert(j, p.position);
         let reach = 2.0 * p.spacing;
-        self.patch.gather(self.surface, self.positions, p.face, p.position, p.normal, reach);
-        let (patch, alive, points) = (&self.patch, &mut self.alive, self.points);
+        let mut patch = LazyPatch::new(&mut self.patch, p, reach);
+        let (surface, positions) = (self.surface, self.positions);
+        let (alive, points) = (&mut self.alive, self.points);
         let reach2 = reach * reach;
         self.grid.for_each_cell_within(p.position, reach, |cell, first, slots| {
             if alive.cell_is_empty(cell) {
@@ -511,7 +545,7 @@ impl<'a> DiskSampler<'a> {
                     return;
                 }
                 let q = &points[k as usize];
-                let g = patch.geodesic_to(q.position, q.normal, q.face);
+                let g = patch.geodesic_to(surface, positions, q);
                 if g <= p.spacing.max(q.spacing) {
                     alive.remove(k);
                 } else if g <= reach {
@@ -530,12 +564,11 @@ impl<'a> DiskSampler<'a> {
         if q.spacing <= self.check_above {
             return false;
         }
-        self.check_patch.gather(self.surface, self.positions, q.face, q.position, q.normal, q.spacing);
+        let mut patch = LazyPatch::new(&mut self.check_patch, q, q.spacing);
         let mut conflict = false;
-        let (patch, points) = (&self.check_patch, self.points);
+        let (surface, positions, points) = (self.surface, self.positions, self.points);
         self.sample_grid.for_each_candidate(q.position, q.spacing, |s| {
-            let p = &points[s as usize];
-            conflict |= patch.geodesic_to(p.position, p.normal, p.face) <= q.spacing;
+            conflict |= patch.geodesic_to(surface, positions, &points[s as usize]) <= q.spacing;
         });
         conflict
     }
