@@ -242,8 +242,9 @@ fn same_seed_same_roots_at_any_thread_count() {
     }
 }
 
-/// `System::new` measures the sampling figures beside the static solve
-/// (`Planted::metrics` in a `rayon::join`): its report must hold exactly
+/// `System::new` measures the sampling figures beside the static
+/// adjustment (`Planted::metrics` through `frame::solve_beside`, a
+/// `rayon::join`): its report must hold exactly
 /// the figures and spacing that `sample_roots` gives on the same mesh and
 /// config, at one and two threads.
 #[test]

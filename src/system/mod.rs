@@ -127,16 +127,15 @@ impl System {
         let Self { pool, dressing, coat, work, sampling, .. } = &mut system;
         let dressing = &*dressing;
         // The sampling metrics only report on the roots: they run beside the
-        // static solve, which leaves a second thread mostly idle (its levels
-        // hold a few feathers each). Neither reads what the other writes, so
-        // the results are those of running them one after the other.
-        let (metrics, solved) = pool.install(|| {
-            rayon::join(
-                || planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta),
-                || crate::frame::solve(coat, dressing, &rest, work, progress),
-            )
-        });
-        solved?;
+        // static adjustment, which leaves a second thread mostly idle (its
+        // levels hold a few feathers each). Neither reads what the other
+        // writes, so the results are those of running them one after the
+        // other.
+        let metrics = pool.install(|| {
+            crate::frame::solve_beside(coat, dressing, &rest, work, progress, || {
+                planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta)
+            })
+        })?;
         sampling.relative_radius = metrics.relative_radius;
         sampling.coverage_gap = metrics.coverage_gap;
         sampling.alignment = metrics.alignment;
