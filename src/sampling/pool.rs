@@ -135,6 +135,7 @@ impl<'a> DensityField<'a> {
         }
         let blocks = count.div_ceil(POOL_BLOCK);
         let memo = self.burial_memo(count, total);
+        let faces = FaceLookup::new(&self.cdf);
         let parts: Vec<Vec<PoolPoint>> = (0..blocks)
             .into_par_iter()
             .map(|b| {
@@ -143,7 +144,7 @@ impl<'a> DensityField<'a> {
                 }
                 let wanted = POOL_BLOCK.min(count - b * POOL_BLOCK);
                 let mut rng = Rng::for_stream(seed ^ POOL_STREAM, b as u64);
-                self.draw_block(&mut rng, d, wanted, total, &memo)
+                self.draw_block(&mut rng, d, wanted, total, &memo, &faces)
             })
             .collect();
         parts.concat()
@@ -179,13 +180,21 @@ impl<'a> DensityField<'a> {
         BurialMemo { start, buried }
     }
 
-    fn draw_block(&self, rng: &mut Rng, d: f32, wanted: usize, total: f64, memo: &BurialMemo) -> Vec<PoolPoint> {
+    fn draw_block(
+        &self,
+        rng: &mut Rng,
+        d: f32,
+        wanted: usize,
+        total: f64,
+        memo: &BurialMemo,
+        faces: &FaceLookup<'_>,
+    ) -> Vec<PoolPoint> {
         let mut out = Vec::with_capacity(wanted);
         let mut attempts = 0usize;
         while out.len() < wanted && attempts < 64 * wanted {
             attempts += 1;
             let u = rng.next_f64() * total;
-            let face = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+            let face = faces.first_above(u).min(self.cdf.len() - 1);
             let (mut r1, mut r2) = (rng.next_f32(), rng.next_f32());
             if r1 + r2 > 1.0 {
                 (r1, r2) = (1.0 - r1, 1.0 - r2);
@@ -210,6 +219,50 @@ impl<'a> DensityField<'a> {
             out.push(PoolPoint { position, normal, face: face as u32, bary: point.bary, spacing: d * scale });
         }
         out
+    }
+}
+
+/// `cdf.partition_point(|&c| c <= u)` over a non-decreasing `cdf`, found
+/// through a guide table: bucket `b` of `[0, total)` in as many buckets as
+/// entries holds the partition point of its lower end, so a draw searches
+/// only between two guide entries (falling back to the whole table when
+/// rounding put `u` outside its bucket's bracket).
+struct FaceLookup<'a> {
+    cdf: &'a [f64],
+    /// Per bucket, then one more: the partition point at the bucket's lower end.
+    guide: Vec<u32>,
+    /// Buckets per unit of `u`.
+    scale: f64,
+}
+
+impl<'a> FaceLookup<'a> {
+    fn new(cdf: &'a [f64]) -> Self {
+        let total = cdf.last().copied().unwrap_or(0.0);
+        let buckets = cdf.len().max(1);
+        let step = total / buckets as f64;
+        let mut guide = Vec::with_capacity(buckets + 1);
+        let mut at = 0usize;
+        for b in 0..buckets {
+            let threshold = b as f64 * step;
+            while at < cdf.len() && cdf[at] <= threshold {
+                at += 1;
+            }
+            guide.push(at as u32);
+        }
+        guide.push(cdf.len() as u32);
+        Self { cdf, guide, scale: if total > 0.0 { buckets as f64 / total } else { 0.0 } }
+    }
+
+    #[inline]
+    fn first_above(&self, u: f64) -> usize {
+        let b = ((u * self.scale) as usize).min(self.guide.len() - 2);
+        let (lo, hi) = (self.guide[b] as usize, self.guide[b + 1] as usize);
+        let bracketed = (lo == 0 || self.cdf[lo - 1] <= u) && (hi == self.cdf.len() || self.cdf[hi] > u);
+        if bracketed {
+            lo + self.cdf[lo..hi].partition_point(|&c| c <= u)
+        } else {
+            self.cdf.partition_point(|&c| c <= u)
+        }
     }
 }
 
@@ -571,5 +624,48 @@ impl<'a> DiskSampler<'a> {
             conflict |= patch.geodesic_to(surface, positions, &points[s as usize]) <= q.spacing;
         });
         conflict
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The guide table finds the partition point of a full binary search,
+    /// whatever the weights: runs of zero weight (bare faces), one face
+    /// holding most of the total, and draws at the entries and bucket
+    /// edges themselves.
+    #[test]
+    fn face_lookup_is_the_partition_point() {
+        let mut rng = Rng::new(21);
+        for case in 0..40 {
+            let n = 1 + (rng.next_f32() * 300.0) as usize;
+            let mut total = 0.0f64;
+            let cdf: Vec<f64> = (0..n)
+                .map(|i| {
+                    let w = match case % 4 {
+                        0 => rng.next_f64(),
+                        1 if rng.next_f32() < 0.6 => 0.0,
+                        2 if i == n / 2 => 1e6,
+                        _ => rng.next_f64() * rng.next_f64(),
+                    };
+                    total += w;
+                    total
+                })
+                .collect();
+            if total <= 0.0 {
+                continue;
+            }
+            let lookup = FaceLookup::new(&cdf);
+            let step = total / n as f64;
+            let draws = (0..500)
+                .map(|_| rng.next_f64() * total)
+                .chain(cdf.iter().copied())
+                .chain((0..n).map(|b| b as f64 * step))
+                .chain([0.0, total, f64::from_bits(total.to_bits() - 1)]);
+            for u in draws {
+                assert_eq!(lookup.first_above(u), cdf.partition_point(|&c| c <= u), "case {case}, u = {u}");
+            }
+        }
     }
 }
