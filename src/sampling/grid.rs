@@ -212,18 +212,22 @@ fn column_key(x: i32, y: i32) -> u64 {
     ((x as u32 as u64) << 32) | y as u32 as u64
 }
 
-/// The indices `0..keys.len()` sorted stably by `keys` (least significant
-/// digit first radix sort over the bits the largest key uses).
+/// The indices `0..keys.len()` sorted stably by `keys`: a least significant
+/// digit first radix sort over the bits the largest key uses, in as few
+/// passes as digits of up to `log2(8 n)` bits (at least 11) allow, so a
+/// grid's renumbered cell keys usually take one counting pass.
 fn stable_order_by_key(keys: &[u64]) -> Vec<u32> {
-    const DIGIT: u32 = 11;
-    const BUCKETS: usize = 1 << DIGIT;
     let bits = u64::BITS - keys.iter().copied().max().unwrap_or(0).leading_zeros();
+    let widest = (u64::BITS - 1 - (8 * keys.len() as u64).max(1).leading_zeros()).clamp(11, 24);
+    let passes = bits.div_ceil(widest);
+    let digit_bits = if passes == 0 { 0 } else { bits.div_ceil(passes) };
+    let mask = (1u64 << digit_bits) - 1;
     let mut pairs: Vec<(u64, u32)> = keys.iter().enumerate().map(|(i, &k)| (k, i as u32)).collect();
     let mut next = vec![(0u64, 0u32); keys.len()];
-    let mut counts = vec![0u32; BUCKETS];
-    let mut shift = 0;
-    while shift < bits {
-        let digit = |k: u64| ((k >> shift) as usize) & (BUCKETS - 1);
+    let mut counts = vec![0u32; 1 << digit_bits];
+    for pass in 0..passes {
+        let shift = pass * digit_bits;
+        let digit = |k: u64| ((k >> shift) & mask) as usize;
         counts.fill(0);
         for &(k, _) in &pairs {
             counts[digit(k)] += 1;
@@ -238,7 +242,6 @@ fn stable_order_by_key(keys: &[u64]) -> Vec<u32> {
             *slot += 1;
         }
         std::mem::swap(&mut pairs, &mut next);
-        shift += DIGIT;
     }
     pairs.into_iter().map(|(_, i)| i).collect()
 }
