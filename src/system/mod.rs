@@ -96,7 +96,7 @@ impl System {
         if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
             dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
         }
-        // The metrics are measured below, beside the static solve.
+        // The metrics are measured below, beside the static adjustment.
         let sampling_report = SamplingReport {
             roots: dressing.len(),
             spacing: planted.spacing,
