@@ -554,6 +554,28 @@ mod tests {
         }
     }
 
+    /// Non-finite positions (which a caller should never pass) leave the
+    /// grid usable: their cells fall outside the packed range, so columns
+    /// are hashed and scanned whole, and queries still find exactly the
+    /// finite points in range.
+    #[test]
+    fn non_finite_positions_do_not_break_queries() {
+        let mut rng = Rng::new(13);
+        let mut pts: Vec<Vec3> =
+            (0..300).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0).collect();
+        pts.push(Vec3::new(f32::NAN, 0.0, 0.0));
+        pts.push(Vec3::new(0.5, f32::NEG_INFINITY, 0.5));
+        let grid = StaticGrid::new(&pts, 0.3);
+        assert!(!grid.z_sorted);
+        for c in [Vec3::new(0.1, -0.2, 0.3), Vec3::splat(1.5), Vec3::splat(-1.9)] {
+            let mut found = Vec::new();
+            grid.for_each_within(c, 0.7, |i, _| found.push(i));
+            found.sort_unstable();
+            let expected: Vec<u32> = (0..pts.len() as u32).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
+            assert_eq!(found, expected, "centre {c}");
+        }
+    }
+
     /// A radius far beyond the cell size (or infinite) scans instead of
     /// walking cells, and gives the same calls in the same order as the walk.
     #[test]
