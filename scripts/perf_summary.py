@@ -6,7 +6,7 @@ call stacks, leaf first) as Markdown: where a frame's time goes by phase
     perf script -i perf.data --no-inline -F tid,ip,sym | python3 scripts/perf_summary.py [--within SYMBOL]
 
 With --within, only samples with SYMBOL on their stack are counted (e.g.
-plumage::animation::step::step_coat for the frames alone).
+plumage::frame::step::step_coat for the frames alone).
 
 Phases match symbols by prefix, so `sample_roots` also covers
 `sample_roots_with_progress` (the library is built with line

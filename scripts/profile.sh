@@ -20,7 +20,7 @@ perf record -q -e cpu-clock -F 499 --call-graph dwarf,16384 -o "$data" -- "$host
 perf script -i "$data" --no-inline -F tid,ip,sym 2>/dev/null > out/profile/perf.txt
 python3 scripts/perf_summary.py < out/profile/perf.txt
 # The frames alone (nothing when no frame was stepped).
-if grep -q "plumage::animation::step::step_coat" out/profile/perf.txt; then
+if grep -q "plumage::frame::step::step_coat" out/profile/perf.txt; then
   echo
-  python3 scripts/perf_summary.py --within plumage::animation::step::step_coat < out/profile/perf.txt
+  python3 scripts/perf_summary.py --within plumage::frame::step::step_coat < out/profile/perf.txt
 fi

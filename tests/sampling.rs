@@ -241,3 +241,30 @@ fn same_seed_same_roots_at_any_thread_count() {
         assert_ne!(bits(&one), bits(&other), "{sampler:?}: another seed gives other roots");
     }
 }
+
+/// `System::new` measures the sampling figures beside the static
+/// adjustment (`Planted::metrics` through `frame::solve_beside`, a
+/// `rayon::join`): its report must hold exactly
+/// the figures and spacing that `sample_roots` gives on the same mesh and
+/// config, at one and two threads.
+#[test]
+fn the_systems_sampling_report_is_the_samplings_own() {
+    let plate = thin_box(6.0, 4.0, 0.05, 12, 8);
+    for threads in [1, 2] {
+        let config = Config { seed: 5, target_feathers: 500, threads, ..Config::default() };
+        let d = dress(&plate, None, &config);
+        let alone = sample(&d, &config);
+        let system = plumage::System::new(&config, &MeshInput::new(&plate.positions, &plate.indices)).unwrap();
+        let report = system.sampling_report().unwrap();
+        assert_eq!(report.roots, alone.roots.len(), "{threads} threads");
+        assert_eq!(report.spacing.to_bits(), alone.spacing.to_bits(), "{threads} threads");
+        let figures = |r: f32, g: f32, a: f32| [r, g, a].map(f32::to_bits);
+        assert_eq!(
+            figures(report.relative_radius, report.coverage_gap, report.alignment),
+            figures(alone.metrics.relative_radius, alone.metrics.coverage_gap, alone.metrics.alignment),
+            "{threads} threads: {report:?} against {:?}",
+            alone.metrics
+        );
+        assert!(report.coverage_gap > 0.0 && report.alignment.is_finite());
+    }
+}

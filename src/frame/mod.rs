@@ -33,7 +33,7 @@ mod solve;
 mod step;
 
 pub use phases::Workspace;
-pub use solve::solve;
+pub use solve::{solve, solve_beside};
 pub use step::{StepWorkspace, step_coat};
 
 use crate::Mode;

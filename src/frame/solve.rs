@@ -22,6 +22,23 @@ pub fn solve(
     work: &mut Workspace,
     progress: &Progress,
 ) -> Result<()> {
+    solve_beside(coat, dressing, positions, work, progress, || ())
+}
+
+/// As [`solve`], and runs `beside` on the current pool beside the
+/// adjustment (`rayon::join`), returning what it returned. The adjustment
+/// goes through levels of a few feathers each, so it leaves a second worker
+/// mostly idle; `beside` is work that reads none of what the solve writes
+/// (create measures the sampling figures there). It does not run when the
+/// solve stops before the adjustment.
+pub fn solve_beside<R: Send>(
+    coat: &mut Coat,
+    dressing: &Dressing,
+    positions: &[Vec3],
+    work: &mut Workspace,
+    progress: &Progress,
+    beside: impl FnOnce() -> R + Send,
+) -> Result<R> {
     let start = Instant::now();
     coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
@@ -43,8 +60,10 @@ pub fn solve(
         params: &dressing.adjust_params,
         steps: AdjustSteps::Full,
     };
-    let stats = work.adjuster.adjust_in_order_until(&run, &mut coat.poses, Selection::All, &|done| {
-        progress.check(Phase::Adjusting, done).is_ok()
+    let (side, stats) = rayon::join(beside, || {
+        work.adjuster.adjust_in_order_until(&run, &mut coat.poses, Selection::All, &|done| {
+            progress.check(Phase::Adjusting, done).is_ok()
+        })
     });
     // A stopped adjustment (None) has set the progress's stop flag.
     progress.check(Phase::Adjusting, 1.0)?;
@@ -69,5 +88,5 @@ pub fn solve(
         neighbourhood_seconds,
         levels: stats.levels,
     };
-    Ok(())
+    Ok(side)
 }

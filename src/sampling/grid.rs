@@ -4,6 +4,7 @@
 
 use crate::rng::mix64;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
@@ -14,9 +15,15 @@ use std::hash::{BuildHasherDefault, Hasher};
 struct Cell([i32; 3]);
 
 impl Cell {
+    /// The coordinates as the packed key holds them (21 bits each).
+    #[inline]
+    fn packed_coordinates(&self) -> [u64; 3] {
+        self.0.map(|c| c as u32 as u64 & 0x1F_FFFF)
+    }
+
     #[inline]
     fn packed(&self) -> u64 {
-        let [x, y, z] = self.0.map(|c| c as u32 as u64 & 0x1F_FFFF);
+        let [x, y, z] = self.packed_coordinates();
         (x << 42) | (y << 21) | z
     }
 }
@@ -50,9 +57,19 @@ impl Hasher for CellHasher {
 
 type CellMap<V> = HashMap<Cell, V, BuildHasherDefault<CellHasher>>;
 
+#[inline]
 fn cell_of(p: Vec3, inv_cell: f32) -> Cell {
-    let c = (p * inv_cell).floor();
-    Cell([c.x as i32, c.y as i32, c.z as i32])
+    let c = p * inv_cell;
+    Cell([floor_to_i32(c.x), floor_to_i32(c.y), floor_to_i32(c.z)])
+}
+
+/// `v.floor() as i32` (saturating, NaN → 0) without the library call that
+/// `floor` is on a baseline x86_64 target: truncate, then step down when
+/// that rounded up.
+#[inline]
+fn floor_to_i32(v: f32) -> i32 {
+    let t = v as i32;
+    if (t as f32) > v { t.saturating_sub(1) } else { t }
 }
 
 /// Number of cells in the box that [`for_each_cell`] walks (as f64: it can
@@ -85,47 +102,149 @@ fn ball_meets_cell(center: Vec3, radius: f32, inv_cell: f32, cell: Cell) -> bool
             <= radius * radius
 }
 
-/// Visits every cell that meets the ball of `radius` around `center`.
-fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cell)) {
-    let lo = cell_of(center - Vec3::splat(radius), inv_cell);
-    let hi = cell_of(center + Vec3::splat(radius), inv_cell);
+/// One (x, y) column of the cells that meet a ball: the z range of the
+/// ball's box, and the test of a z cell.
+struct ColumnWalk {
+    z_lo: i32,
+    z_hi: i32,
+    /// The squared gap from the centre to the column in x and y.
+    gxy: f32,
+    center_z: f32,
+    cell: f32,
+    r2: f32,
+}
+
+impl ColumnWalk {
+    /// Whether cell z of this column meets the ball (same test as the
+    /// full walk: within the box, and the summed gaps within `r²`).
+    #[inline]
+    fn meets(&self, z: i32) -> bool {
+        self.z_lo <= z && z <= self.z_hi && self.gxy + axis_gap(self.center_z, z, self.cell) <= self.r2
+    }
+}
+
+/// Calls `f(x, y, column)` for every (x, y) column of the box around the
+/// ball of `radius` around `center` that the ball meets, in (x, y) order.
+#[inline]
+fn for_each_column(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(i32, i32, &ColumnWalk)) {
+    let lo = cell_of(center - Vec3::splat(radius), inv_cell).0;
+    let hi = cell_of(center + Vec3::splat(radius), inv_cell).0;
     let cell = 1.0 / inv_cell;
     let r2 = radius * radius;
-    let gap = |c: f32, k: i32| axis_gap(c, k, cell);
-    let (lo, hi) = (lo.0, hi.0);
     for x in lo[0]..=hi[0] {
-        let gx = gap(center.x, x);
+        let gx = axis_gap(center.x, x, cell);
         for y in lo[1]..=hi[1] {
-            let gxy = gx + gap(center.y, y);
+            let gxy = gx + axis_gap(center.y, y, cell);
             if gxy > r2 {
                 continue;
             }
-            for z in lo[2]..=hi[2] {
-                if gxy + gap(center.z, z) <= r2 {
-                    f(Cell([x, y, z]));
-                }
-            }
+            f(x, y, &ColumnWalk { z_lo: lo[2], z_hi: hi[2], gxy, center_z: center.z, cell, r2 });
         }
     }
 }
 
+/// Visits every cell that meets the ball of `radius` around `center`.
+fn for_each_cell(center: Vec3, radius: f32, inv_cell: f32, mut f: impl FnMut(Cell)) {
+    for_each_column(center, radius, inv_cell, |x, y, column| {
+        for z in column.z_lo..=column.z_hi {
+            if column.meets(z) {
+                f(Cell([x, y, z]));
+            }
+        }
+    });
+}
+
 /// A grid over a fixed point set, stored sorted by cell.
+///
+/// Cells are sorted by their packed key, which within the bounding box is
+/// lexicographic (x, y, z) order, so the cells of one (x, y) column are
+/// contiguous, in z order. A radius query looks each column of its box up
+/// once (a dense table over the box's columns; a hash map when that table
+/// would be large or a coordinate lies outside the packed range) and reads
+/// the column's cells in the z range, instead of one hash lookup per cell.
 #[derive(Clone, Debug)]
 pub(crate) struct StaticGrid {
     origin: Vec3,
     inv_cell: f32,
-    /// Cell → its id, an index into `spans`.
-    cells: CellMap<u32>,
-    /// Per cell id, in slot order: the cell's slots `a..b`.
-    spans: Vec<(u32, u32)>,
+    /// (x, y) → the index of its column in `column_start`.
+    columns: ColumnIndex,
+    /// Per occupied column, in cell order: its first cell id; then the cell count.
+    column_start: Vec<u32>,
+    /// Per cell id: its z coordinate.
+    cell_z: Vec<i32>,
+    /// Whether every cell lies within the packed range, so that the cells
+    /// of a column are in z order.
+    z_sorted: bool,
+    /// Per cell id: its first slot; then the slot count.
+    cell_start: Vec<u32>,
     /// Sorted slot → the caller's index.
     order: Vec<u32>,
     /// Positions in slot order.
     positions: Vec<Vec3>,
 }
 
+/// Where the grid finds an (x, y) column.
+#[derive(Clone, Debug)]
+enum ColumnIndex {
+    /// Every column of the box `[0, nx) × [0, ny)`: the column's index, or
+    /// `u32::MAX` when it is empty.
+    Dense { nx: i32, ny: i32, ids: Vec<u32> },
+    /// Occupied columns only, keyed by both coordinates.
+    Hashed(HashMap<u64, u32, BuildHasherDefault<CellHasher>>),
+}
+
 /// Cells a side that the packed key tells apart.
 const PACKED_CELLS: f32 = (1u32 << 21) as f32;
+
+/// A dense column table is used when it has at most this many entries per
+/// point (or [`DENSE_COLUMNS_MIN`]).
+const DENSE_COLUMNS_PER_POINT: u64 = 4;
+const DENSE_COLUMNS_MIN: u64 = 1 << 16;
+
+/// Whether a cell coordinate is one the packed key holds as it is.
+#[inline]
+fn in_packed_range(c: i32) -> bool {
+    (0..PACKED_CELLS as i32).contains(&c)
+}
+
+#[inline]
+fn column_key(x: i32, y: i32) -> u64 {
+    ((x as u32 as u64) << 32) | y as u32 as u64
+}
+
+/// The indices `0..keys.len()` sorted stably by `keys`: a least significant
+/// digit first radix sort over the bits the largest key uses, in as few
+/// passes as digits of up to `log2(8 n)` bits (at least 11) allow, so a
+/// grid's renumbered cell keys usually take one counting pass.
+fn stable_order_by_key(keys: &[u64]) -> Vec<u32> {
+    let bits = u64::BITS - keys.iter().copied().max().unwrap_or(0).leading_zeros();
+    let widest = (u64::BITS - 1 - (8 * keys.len() as u64).max(1).leading_zeros()).clamp(11, 24);
+    let passes = bits.div_ceil(widest);
+    let digit_bits = if passes == 0 { 0 } else { bits.div_ceil(passes) };
+    let mask = (1u64 << digit_bits) - 1;
+    let mut pairs: Vec<(u64, u32)> = keys.iter().enumerate().map(|(i, &k)| (k, i as u32)).collect();
+    let mut next = vec![(0u64, 0u32); keys.len()];
+    let mut counts = vec![0u32; 1 << digit_bits];
+    for pass in 0..passes {
+        let shift = pass * digit_bits;
+        let digit = |k: u64| ((k >> shift) & mask) as usize;
+        counts.fill(0);
+        for &(k, _) in &pairs {
+            counts[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for c in counts.iter_mut() {
+            (*c, sum) = (sum, sum + *c);
+        }
+        for &pair in &pairs {
+            let slot = &mut counts[digit(pair.0)];
+            next[*slot as usize] = pair;
+            *slot += 1;
+        }
+        std::mem::swap(&mut pairs, &mut next);
+    }
+    pairs.into_iter().map(|(_, i)| i).collect()
+}
 
 impl StaticGrid {
     /// Buckets `positions` into cells of size `cell` (enlarged if the points
@@ -140,39 +259,100 @@ impl StaticGrid {
         let inv_cell = 1.0 / cell;
         // Within the bounding box the packed key is unique per cell, so a
         // stable sort on it alone groups cells and keeps index order inside.
-        let mut keyed: Vec<(u64, u32)> =
-            positions.iter().enumerate().map(|(i, &p)| (cell_of(p - origin, inv_cell).packed(), i as u32)).collect();
-        keyed.sort_by_key(|&(key, _)| key);
-        let mut cells = CellMap::default();
-        let mut spans = Vec::new();
+        // The sort runs on the packed coordinates renumbered densely, in the
+        // same order: (x · ny + y) · nz + z.
+        let cells: Vec<Cell> = positions.par_iter().map(|&p| cell_of(p - origin, inv_cell)).collect();
+        let dims = cells.iter().fold([0u64; 3], |n, c| {
+            let p = c.packed_coordinates();
+            [n[0].max(p[0] + 1), n[1].max(p[1] + 1), n[2].max(p[2] + 1)]
+        });
+        let keys: Vec<u64> = cells
+            .par_iter()
+            .map(|c| {
+                let [x, y, z] = c.packed_coordinates();
+                (x * dims[1] + y) * dims[2] + z
+            })
+            .collect();
+        let order = stable_order_by_key(&keys);
+        let (mut column_start, mut cell_z, mut cell_start) = (Vec::new(), Vec::new(), Vec::new());
+        let mut column_cells: Vec<(i32, i32)> = Vec::new();
+        let mut z_sorted = true;
         let mut start = 0;
-        while start < keyed.len() {
-            let mut end = start;
-            while end < keyed.len() && keyed[end].0 == keyed[start].0 {
+        while start < order.len() {
+            let key = keys[order[start] as usize];
+            let mut end = start + 1;
+            while end < order.len() && keys[order[end] as usize] == key {
                 end += 1;
             }
-            let cell = cell_of(positions[keyed[start].1 as usize] - origin, inv_cell);
-            cells.insert(cell, spans.len() as u32);
-            spans.push((start as u32, end as u32));
+            let [x, y, z] = cells[order[start] as usize].0;
+            z_sorted &= [x, y, z].iter().all(|&c| in_packed_range(c));
+            if column_cells.last() != Some(&(x, y)) {
+                column_cells.push((x, y));
+                column_start.push(cell_z.len() as u32);
+            }
+            cell_z.push(z);
+            cell_start.push(start as u32);
             start = end;
         }
-        let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
-        let positions = order.iter().map(|&i| positions[i as usize]).collect();
-        Self { origin, inv_cell, cells, spans, order, positions }
+        column_start.push(cell_z.len() as u32);
+        cell_start.push(order.len() as u32);
+        let columns = Self::column_index(&column_cells, positions.len(), z_sorted);
+        let positions = order.par_iter().map(|&i| positions[i as usize]).collect();
+        Self { origin, inv_cell, columns, column_start, cell_z, z_sorted, cell_start, order, positions }
+    }
+
+    /// The column table over `column_cells` (occupied columns in cell
+    /// order); dense only when every cell is `in_range`.
+    fn column_index(column_cells: &[(i32, i32)], points: usize, in_range: bool) -> ColumnIndex {
+        let (nx, ny) = column_cells.iter().fold((0, 0), |(nx, ny), &(x, y)| (nx.max(x + 1), ny.max(y + 1)));
+        let dense_limit = (DENSE_COLUMNS_PER_POINT * points as u64).max(DENSE_COLUMNS_MIN);
+        if in_range && nx as u64 * ny as u64 <= dense_limit {
+            let mut ids = vec![u32::MAX; nx as usize * ny as usize];
+            for (c, &(x, y)) in column_cells.iter().enumerate() {
+                ids[x as usize * ny as usize + y as usize] = c as u32;
+            }
+            ColumnIndex::Dense { nx, ny, ids }
+        } else {
+            ColumnIndex::Hashed(
+                column_cells.iter().enumerate().map(|(c, &(x, y))| (column_key(x, y), c as u32)).collect(),
+            )
+        }
+    }
+
+    /// The column index of (x, y), if occupied.
+    #[inline]
+    fn column(&self, x: i32, y: i32) -> Option<u32> {
+        match &self.columns {
+            ColumnIndex::Dense { nx, ny, ids } => {
+                if x < 0 || y < 0 || x >= *nx || y >= *ny {
+                    return None;
+                }
+                let id = ids[x as usize * *ny as usize + y as usize];
+                (id != u32::MAX).then_some(id)
+            }
+            ColumnIndex::Hashed(map) => map.get(&column_key(x, y)).copied(),
+        }
     }
 
     /// Number of occupied cells (cell ids are `0..cell_count()`).
     pub(crate) fn cell_count(&self) -> usize {
-        self.spans.len()
+        self.cell_z.len()
     }
 
     /// Per slot, the id of its cell.
     pub(crate) fn slot_cells(&self) -> Vec<u32> {
         let mut out = vec![0u32; self.positions.len()];
-        for (id, &(a, b)) in self.spans.iter().enumerate() {
-            out[a as usize..b as usize].fill(id as u32);
+        for (id, span) in self.cell_start.windows(2).enumerate() {
+            out[span[0] as usize..span[1] as usize].fill(id as u32);
         }
         out
+    }
+
+    /// Calls `f(cell id, first slot, positions)` for cell `id`.
+    #[inline]
+    fn visit(&self, id: usize, f: &mut impl FnMut(u32, u32, &[Vec3])) {
+        let (a, b) = (self.cell_start[id], self.cell_start[id + 1]);
+        f(id as u32, a, &self.positions[a as usize..b as usize]);
     }
 
     /// Calls `f(cell id, first slot, positions)` for every occupied cell
@@ -182,20 +362,34 @@ impl StaticGrid {
     /// of what it looks for.
     #[inline]
     pub(crate) fn for_each_cell_within(&self, center: Vec3, radius: f32, mut f: impl FnMut(u32, u32, &[Vec3])) {
+        let center = center - self.origin;
         // A radius huge against the cell (spacing multipliers far apart)
         // would walk more cells than there are points: visit the occupied
         // cells instead. Slots are sorted by cell in the walk's (x, y, z)
         // order, so the calls come in the same order either way.
-        if box_cell_count(center - self.origin, radius, self.inv_cell) > self.positions.len() as f64 {
-            for (id, &(a, b)) in self.spans.iter().enumerate() {
-                f(id as u32, a, &self.positions[a as usize..b as usize]);
+        if box_cell_count(center, radius, self.inv_cell) > self.positions.len() as f64 {
+            for id in 0..self.cell_count() {
+                self.visit(id, &mut f);
             }
             return;
         }
-        for_each_cell(center - self.origin, radius, self.inv_cell, |cell| {
-            if let Some(&id) = self.cells.get(&cell) {
-                let (a, b) = self.spans[id as usize];
-                f(id, a, &self.positions[a as usize..b as usize]);
+        // The cells `for_each_cell` would walk, with the same tests, looked
+        // up a column at a time.
+        for_each_column(center, radius, self.inv_cell, |x, y, walk| {
+            let Some(column) = self.column(x, y) else { return };
+            let (a, b) = (self.column_start[column as usize] as usize, self.column_start[column as usize + 1] as usize);
+            if self.z_sorted {
+                let first = a + self.cell_z[a..b].partition_point(|&z| z < walk.z_lo);
+                for id in first..b {
+                    if self.cell_z[id] > walk.z_hi {
+                        break;
+                    }
+                    if walk.meets(self.cell_z[id]) {
+                        self.visit(id, &mut f);
+                    }
+                }
+            } else {
+                (a..b).filter(|&id| walk.meets(self.cell_z[id])).for_each(|id| self.visit(id, &mut f));
             }
         });
     }
@@ -282,6 +476,104 @@ mod tests {
         found.sort_unstable();
         let expected: Vec<u32> = (0..500).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
         assert_eq!(found, expected);
+    }
+
+    #[test]
+    fn floor_to_i32_is_floor_then_cast() {
+        let mut rng = Rng::new(3);
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            -1.0,
+            1.0,
+            -1e-30,
+            2147483520.0,
+            2147483648.0,
+            -2147483648.0,
+            -2147483904.0,
+            1e20,
+            -1e20,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::MIN_POSITIVE,
+        ];
+        let random = (0..10_000).map(|_| (rng.next_f32() - 0.5) * 10f32.powi((rng.next_f32() * 12.0) as i32 - 3));
+        for v in special.into_iter().chain(random) {
+            assert_eq!(floor_to_i32(v), v.floor() as i32, "{v}");
+        }
+    }
+
+    /// The radix sort is the stable sort: equal keys keep index order, at
+    /// any key width.
+    #[test]
+    fn radix_order_is_the_stable_sort() {
+        let mut rng = Rng::new(11);
+        for bits in [1u32, 7, 20, 33, 63, 64] {
+            let keys: Vec<u64> = (0..3000)
+                .map(|_| {
+                    let k = rng.next_u64() >> (64 - bits);
+                    if rng.next_f32() < 0.3 { k & !0xFF } else { k }
+                })
+                .collect();
+            let mut expected: Vec<u32> = (0..keys.len() as u32).collect();
+            expected.sort_by_key(|&i| keys[i as usize]);
+            assert_eq!(stable_order_by_key(&keys), expected, "{bits} bits");
+        }
+        assert!(stable_order_by_key(&[]).is_empty());
+    }
+
+    /// Points spread far apart against the cell: too many columns for the
+    /// dense table, so columns are hashed. Either way a query finds exactly
+    /// the points in range, in slot order: by cell in (x, y, z) order, then
+    /// by index.
+    #[test]
+    fn dense_and_hashed_columns_find_the_points_in_slot_order() {
+        let mut rng = Rng::new(7);
+        let mut pts: Vec<Vec3> =
+            (0..400).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 1000.0).collect();
+        // A dense clump, so that some queries meet many points.
+        pts.extend((0..200).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 3.0 + 500.0));
+        let hashed = StaticGrid::new(&pts, 0.5);
+        assert!(matches!(hashed.columns, ColumnIndex::Hashed(_)));
+        let dense = StaticGrid::new(&pts[400..], 0.5);
+        assert!(matches!(dense.columns, ColumnIndex::Dense { .. }));
+        for (grid, pts) in [(&hashed, &pts[..]), (&dense, &pts[400..])] {
+            for c in [Vec3::splat(501.5), Vec3::new(500.2, 502.9, 501.0), pts[3], pts[150]] {
+                for r in [0.3, 1.1, 2.5] {
+                    let mut found = Vec::new();
+                    grid.for_each_within(c, r, |i, _| found.push(i));
+                    let mut expected: Vec<u32> =
+                        (0..pts.len() as u32).filter(|&i| (pts[i as usize] - c).length() <= r).collect();
+                    expected.sort_by_key(|&i| (cell_of(pts[i as usize] - grid.origin, grid.inv_cell), i));
+                    assert_eq!(found, expected, "centre {c}, radius {r}");
+                }
+            }
+        }
+    }
+
+    /// Non-finite positions (which a caller should never pass) leave the
+    /// grid usable: their cells fall outside the packed range, so columns
+    /// are hashed and scanned whole, and queries still find exactly the
+    /// finite points in range.
+    #[test]
+    fn non_finite_positions_do_not_break_queries() {
+        let mut rng = Rng::new(13);
+        let mut pts: Vec<Vec3> =
+            (0..300).map(|_| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 4.0 - 2.0).collect();
+        pts.push(Vec3::new(f32::NAN, 0.0, 0.0));
+        pts.push(Vec3::new(0.5, f32::NEG_INFINITY, 0.5));
+        let grid = StaticGrid::new(&pts, 0.3);
+        assert!(!grid.z_sorted);
+        for c in [Vec3::new(0.1, -0.2, 0.3), Vec3::splat(1.5), Vec3::splat(-1.9)] {
+            let mut found = Vec::new();
+            grid.for_each_within(c, 0.7, |i, _| found.push(i));
+            found.sort_unstable();
+            let expected: Vec<u32> = (0..pts.len() as u32).filter(|&i| (pts[i as usize] - c).length() <= 0.7).collect();
+            assert_eq!(found, expected, "centre {c}");
+        }
     }
 
     /// A radius far beyond the cell size (or infinite) scans instead of

@@ -104,6 +104,54 @@ pub fn sample_roots_with_progress(
     config: &Config,
     progress: &Progress,
 ) -> Result<Sampling> {
+    let planted = plant_roots_with_progress(mesh, surface, fields, config, progress)?;
+    let metrics = planted.metrics(surface, &mesh.positions, fields, &planted.roots, config.theta);
+    let Planted { roots, spacing, seconds, passes, first_pass_roots, .. } = planted;
+    Ok(Sampling { roots, spacing, metrics, seconds, passes, first_pass_roots })
+}
+
+/// The roots planted, before their quality figures: what
+/// [`sample_roots_with_progress`] returns without its metrics, and what the
+/// metrics read besides the roots, so that a caller can measure them later
+/// or beside other work ([`Planted::metrics`]).
+pub struct Planted {
+    /// The roots, in the order they were placed.
+    pub roots: Vec<RootBinding>,
+    /// The global spacing `d` used (local `d_i = d × spacing_scale`).
+    pub spacing: f32,
+    /// Wall time of the sampling (every pass of a spacing search).
+    pub seconds: f64,
+    /// Sampling passes run: 1 with a given spacing, 1 to 6 in a search.
+    pub passes: u32,
+    /// Roots the first pass planted (the search's first guess).
+    pub first_pass_roots: usize,
+    buried: BuriedSkin,
+}
+
+impl Planted {
+    /// The quality figures of `roots` (these roots, wherever they are now
+    /// kept) on the surface, rest positions and fields they were planted
+    /// on, with stagger angle `theta`: the `metrics` of [`Sampling`].
+    pub fn metrics(
+        &self,
+        surface: &Surface,
+        positions: &[Vec3],
+        fields: &Fields,
+        roots: &[RootBinding],
+        theta: f32,
+    ) -> SamplingMetrics {
+        sampling_metrics(surface, positions, fields, &self.buried, roots, self.spacing, theta)
+    }
+}
+
+/// As [`sample_roots_with_progress`] without the metrics (see [`Planted`]).
+pub fn plant_roots_with_progress(
+    mesh: &WeldedMesh,
+    surface: &Surface,
+    fields: &Fields,
+    config: &Config,
+    progress: &Progress,
+) -> Result<Planted> {
     config.validate()?;
     if surface.face_count() != mesh.triangles.len()
         || surface.vertex_count() != mesh.positions.len()
@@ -137,10 +185,10 @@ pub fn sample_roots_with_progress(
         Some(pool) => bind_roots(surface, positions, fields, pool, &samples, config.seed),
         None => Vec::new(),
     };
+    drop(density);
     let seconds = start.elapsed().as_secs_f64();
     progress.check(Phase::Sampling, 0.95)?;
-    let metrics = sampling_metrics(surface, positions, fields, &buried, &roots, spacing, config.theta);
-    Ok(Sampling { roots, spacing, metrics, seconds, passes: passes.count, first_pass_roots: passes.first_roots })
+    Ok(Planted { roots, spacing, seconds, passes: passes.count, first_pass_roots: passes.first_roots, buried })
 }
 
 /// How many sampling passes ran, and the first one's root count.

@@ -12,6 +12,7 @@ use crate::field::Fields;
 use crate::geometry::SurfacePoint;
 use crate::interior::{BuriedSkin, FaceBurial};
 use crate::rng::Rng;
+use crate::surface::geodesic::SAME_FACING_COS;
 use crate::surface::{NearbyPatch, Surface};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -134,6 +135,7 @@ impl<'a> DensityField<'a> {
         }
         let blocks = count.div_ceil(POOL_BLOCK);
         let memo = self.burial_memo(count, total);
+        let faces = FaceLookup::new(&self.cdf);
         let parts: Vec<Vec<PoolPoint>> = (0..blocks)
             .into_par_iter()
             .map(|b| {
@@ -142,7 +144,7 @@ impl<'a> DensityField<'a> {
                 }
                 let wanted = POOL_BLOCK.min(count - b * POOL_BLOCK);
                 let mut rng = Rng::for_stream(seed ^ POOL_STREAM, b as u64);
-                self.draw_block(&mut rng, d, wanted, total, &memo)
+                self.draw_block(&mut rng, d, wanted, total, &memo, &faces)
             })
             .collect();
         parts.concat()
@@ -178,13 +180,21 @@ impl<'a> DensityField<'a> {
         BurialMemo { start, buried }
     }
 
-    fn draw_block(&self, rng: &mut Rng, d: f32, wanted: usize, total: f64, memo: &BurialMemo) -> Vec<PoolPoint> {
+    fn draw_block(
+        &self,
+        rng: &mut Rng,
+        d: f32,
+        wanted: usize,
+        total: f64,
+        memo: &BurialMemo,
+        faces: &FaceLookup<'_>,
+    ) -> Vec<PoolPoint> {
         let mut out = Vec::with_capacity(wanted);
         let mut attempts = 0usize;
         while out.len() < wanted && attempts < 64 * wanted {
             attempts += 1;
             let u = rng.next_f64() * total;
-            let face = self.cdf.partition_point(|&c| c <= u).min(self.cdf.len() - 1);
+            let face = faces.first_above(u).min(self.cdf.len() - 1);
             let (mut r1, mut r2) = (rng.next_f32(), rng.next_f32());
             if r1 + r2 > 1.0 {
                 (r1, r2) = (1.0 - r1, 1.0 - r2);
@@ -209,6 +219,50 @@ impl<'a> DensityField<'a> {
             out.push(PoolPoint { position, normal, face: face as u32, bary: point.bary, spacing: d * scale });
         }
         out
+    }
+}
+
+/// `cdf.partition_point(|&c| c <= u)` over a non-decreasing `cdf`, found
+/// through a guide table: bucket `b` of `[0, total)` in as many buckets as
+/// entries holds the partition point of its lower end, so a draw searches
+/// only between two guide entries (falling back to the whole table when
+/// rounding put `u` outside its bucket's bracket).
+struct FaceLookup<'a> {
+    cdf: &'a [f64],
+    /// Per bucket, then one more: the partition point at the bucket's lower end.
+    guide: Vec<u32>,
+    /// Buckets per unit of `u`.
+    scale: f64,
+}
+
+impl<'a> FaceLookup<'a> {
+    fn new(cdf: &'a [f64]) -> Self {
+        let total = cdf.last().copied().unwrap_or(0.0);
+        let buckets = cdf.len().max(1);
+        let step = total / buckets as f64;
+        let mut guide = Vec::with_capacity(buckets + 1);
+        let mut at = 0usize;
+        for b in 0..buckets {
+            let threshold = b as f64 * step;
+            while at < cdf.len() && cdf[at] <= threshold {
+                at += 1;
+            }
+            guide.push(at as u32);
+        }
+        guide.push(cdf.len() as u32);
+        Self { cdf, guide, scale: if total > 0.0 { buckets as f64 / total } else { 0.0 } }
+    }
+
+    #[inline]
+    fn first_above(&self, u: f64) -> usize {
+        let b = ((u * self.scale) as usize).min(self.guide.len() - 2);
+        let (lo, hi) = (self.guide[b] as usize, self.guide[b + 1] as usize);
+        let bracketed = (lo == 0 || self.cdf[lo - 1] <= u) && (hi == self.cdf.len() || self.cdf[hi] > u);
+        if bracketed {
+            lo + self.cdf[lo..hi].partition_point(|&c| c <= u)
+        } else {
+            self.cdf.partition_point(|&c| c <= u)
+        }
     }
 }
 
@@ -258,6 +312,9 @@ fn memo_cell_centre(c: usize) -> [f32; 3] {
 struct AliveSet {
     list: Vec<u32>,
     slot: Vec<u32>,
+    /// One bit per pool slot, set while the point is alive: a radius query
+    /// reads only the live points of a cell, in slot order.
+    bits: Vec<u64>,
     /// Per pool slot, its grid cell id.
     slot_cell: Vec<u32>,
     /// Per grid cell id, the points of it still alive.
@@ -272,7 +329,34 @@ impl AliveSet {
         let n = slot_cell.len();
         let mut cell_alive = vec![0u32; grid.cell_count()];
         slot_cell.iter().for_each(|&c| cell_alive[c as usize] += 1);
-        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect(), slot_cell, cell_alive }
+        let mut bits = vec![u64::MAX; n.div_ceil(64)];
+        if n % 64 != 0 {
+            *bits.last_mut().expect("n > 0") = (1u64 << (n % 64)) - 1;
+        }
+        Self { list: (0..n as u32).collect(), slot: (0..n as u32).collect(), bits, slot_cell, cell_alive }
+    }
+
+    /// The live points of slots `first..first + len`, word by word: calls
+    /// `f(self, slot)` for each in slot order. `f` may remove the point it
+    /// is given (the word is read before its points are visited).
+    #[inline]
+    fn for_each_in(&mut self, first: u32, len: u32, mut f: impl FnMut(&mut Self, u32)) {
+        let end = first + len;
+        let mut word = first / 64;
+        while word * 64 < end {
+            let lo = (word * 64).max(first);
+            let hi = (word * 64 + 64).min(end);
+            // Bits lo..hi of this word.
+            let span = hi - lo;
+            let mask = if span == 64 { u64::MAX } else { ((1u64 << span) - 1) << (lo - word * 64) };
+            let mut live = self.bits[word as usize] & mask;
+            while live != 0 {
+                let k = word * 64 + live.trailing_zeros();
+                live &= live - 1;
+                f(self, k);
+            }
+            word += 1;
+        }
     }
 
     #[inline]
@@ -292,6 +376,7 @@ impl AliveSet {
             return;
         }
         self.cell_alive[self.slot_cell[i as usize] as usize] -= 1;
+        self.bits[i as usize / 64] &= !(1u64 << (i % 64));
         let last = self.list.pop().expect("non-empty when an element is alive");
         if last != i {
             self.list[s as usize] = last;
@@ -318,10 +403,10 @@ pub(crate) struct SortedPool {
 impl SortedPool {
     /// Sorts `drawn` into a grid of cell size `cell`.
     pub(crate) fn new(drawn: Vec<PoolPoint>, cell: f32) -> Self {
-        let positions: Vec<Vec3> = drawn.iter().map(|p| p.position).collect();
+        let positions: Vec<Vec3> = drawn.par_iter().map(|p| p.position).collect();
         let grid = StaticGrid::new(&positions, cell);
         let draw_index = grid.order().to_vec();
-        let points = draw_index.iter().map(|&i| drawn[i as usize]).collect();
+        let points = draw_index.par_iter().map(|&i| drawn[i as usize]).collect();
         Self { points, draw_index, grid }
     }
 
@@ -337,6 +422,38 @@ impl SortedPool {
             slots[draw as usize] = slot as u32;
         }
         slots
+    }
+}
+
+/// `G` from a pool point (the centre) to others within `radius`, as
+/// [`NearbyPatch::geodesic_to`] after a `gather` around the centre; the
+/// patch is gathered only once a point faces the other way, since `G` of
+/// points facing the same way is their chord (on a smooth skin, most
+/// queries never need the patch).
+struct LazyPatch<'p> {
+    patch: &'p mut NearbyPatch,
+    center: PoolPoint,
+    radius: f32,
+    gathered: bool,
+}
+
+impl<'p> LazyPatch<'p> {
+    fn new(patch: &'p mut NearbyPatch, center: PoolPoint, radius: f32) -> Self {
+        Self { patch, center, radius, gathered: false }
+    }
+
+    #[inline]
+    fn geodesic_to(&mut self, surface: &Surface, positions: &[Vec3], q: &PoolPoint) -> f32 {
+        let c = &self.center;
+        // The same test and chord as `NearbyPatch::geodesic_to`.
+        if c.normal.dot(q.normal) > SAME_FACING_COS {
+            return (q.position - c.position).length();
+        }
+        if !self.gathered {
+            self.patch.gather(surface, positions, c.face, c.position, c.normal, self.radius);
+            self.gathered = true;
+        }
+        self.patch.geodesic_to(q.position, q.normal, q.face)
     }
 }
 
@@ -468,25 +585,26 @@ impl<'a> DiskSampler<'a> {
         self.samples.push(j);
         self.sample_grid.insert(j, p.position);
         let reach = 2.0 * p.spacing;
-        self.patch.gather(self.surface, self.positions, p.face, p.position, p.normal, reach);
-        let (patch, alive, points) = (&self.patch, &mut self.alive, self.points);
+        let mut patch = LazyPatch::new(&mut self.patch, p, reach);
+        let (surface, positions) = (self.surface, self.positions);
+        let (alive, points) = (&mut self.alive, self.points);
         let reach2 = reach * reach;
         self.grid.for_each_cell_within(p.position, reach, |cell, first, slots| {
             if alive.cell_is_empty(cell) {
                 return;
             }
-            for (k, at) in (first..).zip(slots) {
-                if (*at - p.position).length_squared() > reach2 || !alive.contains(k) {
-                    continue;
+            alive.for_each_in(first, slots.len() as u32, |alive, k| {
+                if (slots[(k - first) as usize] - p.position).length_squared() > reach2 {
+                    return;
                 }
                 let q = &points[k as usize];
-                let g = patch.geodesic_to(q.position, q.normal, q.face);
+                let g = patch.geodesic_to(surface, positions, q);
                 if g <= p.spacing.max(q.spacing) {
                     alive.remove(k);
                 } else if g <= reach {
                     candidates.push(k);
                 }
-            }
+            });
         });
     }
 
@@ -499,13 +617,55 @@ impl<'a> DiskSampler<'a> {
         if q.spacing <= self.check_above {
             return false;
         }
-        self.check_patch.gather(self.surface, self.positions, q.face, q.position, q.normal, q.spacing);
+        let mut patch = LazyPatch::new(&mut self.check_patch, q, q.spacing);
         let mut conflict = false;
-        let (patch, points) = (&self.check_patch, self.points);
+        let (surface, positions, points) = (self.surface, self.positions, self.points);
         self.sample_grid.for_each_candidate(q.position, q.spacing, |s| {
-            let p = &points[s as usize];
-            conflict |= patch.geodesic_to(p.position, p.normal, p.face) <= q.spacing;
+            conflict |= patch.geodesic_to(surface, positions, &points[s as usize]) <= q.spacing;
         });
         conflict
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The guide table finds the partition point of a full binary search,
+    /// whatever the weights: runs of zero weight (bare faces), one face
+    /// holding most of the total, and draws at the entries and bucket
+    /// edges themselves.
+    #[test]
+    fn face_lookup_is_the_partition_point() {
+        let mut rng = Rng::new(21);
+        for case in 0..40 {
+            let n = 1 + (rng.next_f32() * 300.0) as usize;
+            let mut total = 0.0f64;
+            let cdf: Vec<f64> = (0..n)
+                .map(|i| {
+                    let w = match case % 4 {
+                        0 => rng.next_f64(),
+                        1 if rng.next_f32() < 0.6 => 0.0,
+                        2 if i == n / 2 => 1e6,
+                        _ => rng.next_f64() * rng.next_f64(),
+                    };
+                    total += w;
+                    total
+                })
+                .collect();
+            if total <= 0.0 {
+                continue;
+            }
+            let lookup = FaceLookup::new(&cdf);
+            let step = total / n as f64;
+            let draws = (0..500)
+                .map(|_| rng.next_f64() * total)
+                .chain(cdf.iter().copied())
+                .chain((0..n).map(|b| b as f64 * step))
+                .chain([0.0, total, f64::from_bits(total.to_bits() - 1)]);
+            for u in draws {
+                assert_eq!(lookup.first_above(u), cdf.partition_point(|&c| c <= u), "case {case}, u = {u}");
+            }
+        }
     }
 }

@@ -12,7 +12,7 @@ use crate::frame::{StepWorkspace, Workspace};
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
-use crate::sampling::sample_roots_with_progress;
+use crate::sampling::plant_roots_with_progress;
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport};
 use crate::surface::Surface;
 use glam::Vec3;
@@ -90,19 +90,20 @@ impl System {
             config,
         )?;
         progress.check(Phase::Sampling, 0.0)?;
-        let sampling = pool.install(|| sample_roots_with_progress(&welded, &surface, &fields, config, progress))?;
+        let mut planted = pool.install(|| plant_roots_with_progress(&welded, &surface, &fields, config, progress))?;
         progress.check(Phase::Sampling, 1.0)?;
-        let mut dressing = Dressing::new(surface, &welded, sampling.roots, config);
+        let mut dressing = Dressing::new(surface, &welded, std::mem::take(&mut planted.roots), config);
         if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
             dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
         }
+        // The metrics are measured below, beside the static adjustment.
         let sampling_report = SamplingReport {
             roots: dressing.len(),
-            spacing: sampling.spacing,
-            relative_radius: sampling.metrics.relative_radius,
-            coverage_gap: sampling.metrics.coverage_gap,
-            alignment: sampling.metrics.alignment,
-            seconds: sampling.seconds,
+            spacing: planted.spacing,
+            relative_radius: f32::NAN,
+            coverage_gap: f32::NAN,
+            alignment: f32::NAN,
+            seconds: planted.seconds,
         };
         let mut system = Self {
             pool,
@@ -123,8 +124,21 @@ impl System {
             test_panic: Default::default(),
         };
         let rest = system.mesh.positions.clone();
-        let Self { pool, dressing, coat, work, .. } = &mut system;
-        pool.install(|| crate::frame::solve(coat, dressing, &rest, work, progress))?;
+        let Self { pool, dressing, coat, work, sampling, .. } = &mut system;
+        let dressing = &*dressing;
+        // The sampling metrics only report on the roots: they run beside the
+        // static adjustment, which leaves a second thread mostly idle (its
+        // levels hold a few feathers each). Neither reads what the other
+        // writes, so the results are those of running them one after the
+        // other.
+        let metrics = pool.install(|| {
+            crate::frame::solve_beside(coat, dressing, &rest, work, progress, || {
+                planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta)
+            })
+        })?;
+        sampling.relative_radius = metrics.relative_radius;
+        sampling.coverage_gap = metrics.coverage_gap;
+        sampling.alignment = metrics.alignment;
         system.export();
         system.keep_checkpoint();
         Ok(system)
