@@ -82,6 +82,16 @@ pub struct TriangleGrid {
     dims: [usize; 3],
     /// The triangles listed in each cell (by linear cell index).
     cells: Csr<u32>,
+    /// Beside each listed triangle (same place as in `cells`), its box and
+    /// lowest cell, so that a query reads them in a row.
+    entries: Vec<CellEntry>,
+}
+
+/// What a box query reads of a triangle listed in a cell.
+#[derive(Clone, Copy, Debug)]
+struct CellEntry {
+    bounds: Aabb,
+    low: u64,
 }
 
 /// One axis of a packed cell: cell coordinates stay below
@@ -240,6 +250,11 @@ impl TriangleGrid {
                 }
             }
         }
+        self.entries.clear();
+        let (boxes, low_cells) = (&self.boxes, &self.low_cells);
+        self.entries.extend(
+            self.cells.items().iter().map(|&t| CellEntry { bounds: boxes[t as usize], low: low_cells[t as usize] }),
+        );
     }
 
     /// The cell holding `p`, clamped to the grid.
@@ -298,9 +313,9 @@ impl TriangleGrid {
                     let axes = [x > lo[0], y > lo[1], z > lo[2]];
                     let mask = pack_cell(axes.map(|a| if a { CELL_FIELD as usize } else { 0 }));
                     let here = pack_cell([x, y, z]);
-                    for &t in self.cell_items(c) {
-                        let Some(&low) = self.low_cells.get(t as usize) else { continue };
-                        if (low ^ here) & mask == 0 && self.boxes[t as usize].overlaps(query) {
+                    let span = self.cells.span(c);
+                    for (&t, e) in self.cells.items()[span.clone()].iter().zip(&self.entries[span]) {
+                        if (e.low ^ here) & mask == 0 && e.bounds.overlaps(query) {
                             out.push(t);
                         }
                     }
