@@ -15,10 +15,17 @@
 //! depend on the positions alone, so nothing depends on the thread count.
 //!
 //! From frame to frame the leaves (which roots go together) are kept while
-//! their boxes at the current pose stay compact, and so is each leaf's
-//! sorted list of candidate roots while its near leaves stay the same: the
-//! roots do not move on the body, so most of a frame's work is the distance
-//! tests, run several lanes at a time. None of this changes a row.
+//! their boxes at the current pose stay compact, and each leaf keeps, from
+//! the pose where they were made, per root a superset of its row (every
+//! root within its reach plus a margin, with each one's slack) and a short
+//! list of candidates for its k nearest. A cheap certificate (the leaf's
+//! near leaves are still among those the lists were made from, and the
+//! roots have moved, relative to a rigid motion of the leaf, by less than
+//! the margin: [`reuse`]) says when those lists still hold; then a row is
+//! its superset filtered (only the entries whose slack the motion can
+//! have crossed are tested), else the leaf's lists are made again at the
+//! current pose. The roots do not move on the body, so most leaves keep
+//! their lists for many frames. None of this changes a row.
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
@@ -28,6 +35,7 @@
 //! the adjustment checks those exactly.
 
 mod params;
+mod reuse;
 mod rows;
 mod state;
 #[cfg(test)]
@@ -66,6 +74,14 @@ pub struct Neighbourhoods {
     leaf_starts: Vec<u32>,
     /// Bumped at every new layout (0: none yet).
     layout_generation: u64,
+    /// Bumped at every new layout and whenever the reach or the parameters
+    /// change: the chunks' candidate lists hold for one key.
+    cache_key: u64,
+    /// The reach (as bits) and parameters the lists were made with.
+    reach_bits: Vec<u32>,
+    cache_params: Option<NeighbourParams>,
+    /// Leaves whose candidate lists the last rebuild made again.
+    leaves_remade: usize,
     /// Root count of the layout.
     layout_roots: usize,
     /// Sum of the leaves' box diagonals when the layout was made.
@@ -121,6 +137,7 @@ impl Neighbourhoods {
         self.tree_current = true;
         self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
         self.layout_generation += 1;
+        self.cache_key += 1;
         self.layout_roots = frames.len();
     }
 
@@ -141,6 +158,12 @@ impl Neighbourhoods {
                 });
             self.cells.push(Cell { lo, hi, reach });
         }
+    }
+
+    /// Leaves whose candidate lists the last rebuild made again at the
+    /// current pose (the others' were filtered), and the leaf count.
+    pub fn lists_remade(&self) -> (usize, usize) {
+        (self.leaves_remade, self.cells.len())
     }
 
     /// Sum of the leaves' box diagonals.
@@ -266,6 +289,15 @@ impl Neighbourhoods {
             self.gather_cells(frames, reach);
             self.layout_spread = self.spread();
         }
+        // Lists made with another reach or other parameters do not hold.
+        let same_reach =
+            self.reach_bits.len() == reach.len() && self.reach_bits.iter().zip(reach).all(|(&b, r)| b == r.to_bits());
+        if !same_reach || self.cache_params != Some(*params) {
+            self.cache_key += 1;
+            self.reach_bits.clear();
+            self.reach_bits.extend(reach.iter().map(|r| r.to_bits()));
+            self.cache_params = Some(*params);
+        }
         let ids = &self.leaf_ids;
         self.nodes.clear();
         if !self.cells.is_empty() {
@@ -290,13 +322,14 @@ impl Neighbourhoods {
             cells: &self.cells,
             nodes: &self.nodes,
             tree: self.tree_current.then_some(&self.tree),
-            generation: self.layout_generation,
+            generation: self.cache_key,
         };
         self.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, chunk)| {
             let first = (c * per_chunk).min(leaves);
             let last = ((c + 1) * per_chunk).min(leaves);
             ctx.fill(first..last, chunk);
         });
+        self.leaves_remade = self.chunks[..chunks].iter().map(|c| c.leaves_remade).sum();
         // The k nearest the rows could not settle, with a tree over the
         // current positions (the layout's tree is stale).
         if self.chunks[..chunks].iter().any(|c| !c.deferred.is_empty()) {
