@@ -46,7 +46,7 @@ use crate::geometry::RootFrame;
 pub use params::NeighbourParams;
 use params::{row, sanitized_reach};
 use rayon::prelude::*;
-use rows::{Cell, Chunk, Node, RowContext, build_nodes};
+use rows::{Cell, Chunk, Node, RowContext, build_nodes, near_pairs};
 
 /// The leaf layout is kept while the sum of the leaves' box diagonals stays
 /// within this factor of its value when the layout was made: larger boxes
@@ -62,6 +62,9 @@ pub struct Neighbourhoods {
     knn_offsets: Vec<u32>,
     knn_indices: Vec<u32>,
     pairs: Vec<(u32, u32)>,
+    /// The k-nearest rows `pairs` was made from by the last rebuild.
+    pairs_knn_offsets: Vec<u32>,
+    pairs_knn_indices: Vec<u32>,
     obstacle_offsets: Vec<u32>,
     obstacle_indices: Vec<u32>,
     bucket_offsets: Vec<u32>,
@@ -92,6 +95,12 @@ pub struct Neighbourhoods {
     points: Vec<(glam::Vec3, f32)>,
     cells: Vec<Cell>,
     nodes: Vec<Node>,
+    /// Each leaf's near leaves at the current pose (CSR), and the scratch
+    /// of the traversal that finds them.
+    near_starts: Vec<u32>,
+    near: Vec<u32>,
+    pair_stack: Vec<(u32, u32)>,
+    leaf_pairs: Vec<u64>,
     chunks: Vec<Chunk>,
     #[cfg(test)]
     scratch_indices: Vec<u32>,
@@ -128,7 +137,13 @@ impl Neighbourhoods {
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
         self.tree_current = false;
         self.rebuild_rows(frames, reach, params);
-        self.rebuild_pairs(frames.len());
+        // The pairs follow from the k nearest alone: kept when those are
+        // the ones the pairs were made from (most frames).
+        if self.pairs_knn_offsets != self.knn_offsets || self.pairs_knn_indices != self.knn_indices {
+            self.rebuild_pairs(frames.len());
+            self.pairs_knn_offsets.clone_from(&self.knn_offsets);
+            self.pairs_knn_indices.clone_from(&self.knn_indices);
+        }
     }
 
     /// A new leaf layout from a k-d tree over the current positions.
@@ -303,6 +318,19 @@ impl Neighbourhoods {
         if !self.cells.is_empty() {
             build_nodes(&self.cells, 0, self.cells.len() as u32, &mut self.nodes);
         }
+        if !reach.is_empty() {
+            near_pairs(
+                &self.nodes,
+                self.cells.len(),
+                &mut self.near_starts,
+                &mut self.near,
+                &mut self.pair_stack,
+                &mut self.leaf_pairs,
+            );
+        } else {
+            self.near_starts.clear();
+            self.near.clear();
+        }
         let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
         // Chunks of leaves of about equal size, a few per thread.
         let leaves = self.cells.len();
@@ -321,6 +349,8 @@ impl Neighbourhoods {
             points: &self.points,
             cells: &self.cells,
             nodes: &self.nodes,
+            near_starts: &self.near_starts,
+            near: &self.near,
             tree: self.tree_current.then_some(&self.tree),
             generation: self.cache_key,
         };
@@ -354,9 +384,8 @@ impl Neighbourhoods {
                 offsets[i + 1] += offsets[i];
             }
         }
-        self.obstacle_indices.clear();
+        // (Not cleared: every place is written below, the rows partition them.)
         self.obstacle_indices.resize(self.obstacle_offsets[n] as usize, 0);
-        self.knn_indices.clear();
         self.knn_indices.resize(self.knn_offsets[n] as usize, 0);
         for chunk in chunks {
             let (mut at, mut knn_at) = (0usize, 0usize);

@@ -20,6 +20,9 @@ pub(super) struct RowContext<'a> {
     pub(super) points: &'a [(glam::Vec3, f32)],
     pub(super) cells: &'a [Cell],
     pub(super) nodes: &'a [Node],
+    /// Each leaf's near leaves at the current pose, as CSR ([`near_pairs`]).
+    pub(super) near_starts: &'a [u32],
+    pub(super) near: &'a [u32],
     /// A tree over the current positions, when there is one.
     pub(super) tree: Option<&'a KdTree>,
     /// The layout's generation (a chunk's cached unions are valid for it).
@@ -63,10 +66,10 @@ impl RowContext<'_> {
                 continue;
             }
             // The leaves within reach of leaf a now (a included).
-            near_leaves(self.cells, self.nodes, a, 0.0, &mut out.near, &mut out.stack);
+            let near = &self.near[self.near_starts[a] as usize..self.near_starts[a + 1] as usize];
             let leaf = &mut out.cached[local];
             let mut certified = None;
-            if let Some(anchor) = leaf.anchor.filter(|_| leaf.valid && super::reuse::is_subset(&out.near, &leaf.near)) {
+            if let Some(anchor) = leaf.anchor.filter(|_| leaf.valid && super::reuse::is_subset(near, &leaf.near)) {
                 out.union.fill_packed(&leaf.keys, self.points);
                 let map = AnchorMap::between(
                     &anchor,
@@ -439,6 +442,61 @@ fn largest_residual(map: &AnchorMap, reference: &[glam::Vec3], now: impl Fn(usiz
         largest = largest.max(e2);
     }
     if finite { largest.sqrt() } else { f32::NAN }
+}
+
+/// Every leaf's near leaves (as [`near_leaves`] with no widening finds
+/// them, in increasing order) as CSR `starts`, `near`, from one traversal
+/// of the hierarchy against itself: a pair of boxes out of reach prunes
+/// every pair of their leaves. The tests are those of [`near_leaves`]
+/// (symmetric bitwise, and a box's gap is never larger than its leaves'),
+/// so the lists are the same.
+pub(super) fn near_pairs(
+    nodes: &[Node],
+    leaves: usize,
+    starts: &mut Vec<u32>,
+    near: &mut Vec<u32>,
+    stack: &mut Vec<(u32, u32)>,
+    pairs: &mut Vec<u64>,
+) {
+    pairs.clear();
+    stack.clear();
+    if !nodes.is_empty() {
+        stack.push((0, 0));
+    }
+    while let Some((x, y)) = stack.pop() {
+        let (p, q) = (&nodes[x as usize], &nodes[y as usize]);
+        if !p.cell.may_reach(&q.cell, 0.0) {
+            continue;
+        }
+        match (p.children == u32::MAX, q.children == u32::MAX) {
+            (true, true) => {
+                let (a, b) = (u64::from(p.leaf), u64::from(q.leaf));
+                pairs.push((a << 32) | b);
+                if a != b {
+                    pairs.push((b << 32) | a);
+                }
+            }
+            // A node against itself: its halves against themselves and
+            // each other (each unordered pair of subtrees once).
+            _ if x == y => {
+                let c = p.children;
+                stack.extend([(c, c), (c + 1, c + 1), (c, c + 1)]);
+            }
+            (false, _) => stack.extend([(p.children, y), (p.children + 1, y)]),
+            (true, false) => stack.extend([(x, q.children), (x, q.children + 1)]),
+        }
+    }
+    pairs.sort_unstable();
+    starts.clear();
+    starts.resize(leaves + 1, 0);
+    near.clear();
+    for &pair in pairs.iter() {
+        starts[(pair >> 32) as usize + 1] += 1;
+        near.push(pair as u32);
+    }
+    for a in 0..leaves {
+        starts[a + 1] += starts[a];
+    }
 }
 
 /// Appends to `near` the leaves whose boxes come within the sum of the

@@ -270,3 +270,31 @@ fn kept_lists_give_the_exhaustive_rows_through_small_steps_a_rigid_turn_and_a_fo
         assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, jump");
     }
 }
+
+#[test]
+fn one_traversal_finds_every_leafs_near_leaves() {
+    let mut rng = crate::rng::Rng::new(3);
+    for (n, spread) in [(1usize, 1.0f32), (40, 2.0), (3000, 30.0)] {
+        let frames: Vec<RootFrame> = (0..n)
+            .map(|_| {
+                let p = Vec3::new(rng.next_f32(), rng.next_f32(), 0.2 * rng.next_f32()) * spread;
+                RootFrame::from_normal_and_direction(p, Vec3::Z, Vec3::X).unwrap()
+            })
+            .collect();
+        let reach: Vec<f32> = (0..n).map(|_| 0.3 + rng.next_f32()).collect();
+        let mut nb = Neighbourhoods::new();
+        nb.rebuild(&frames, &reach, &NeighbourParams::default());
+        let (mut near, mut stack) = (Vec::new(), Vec::new());
+        let mut total = 0;
+        for a in 0..nb.cells.len() {
+            super::rows::near_leaves(&nb.cells, &nb.nodes, a, 0.0, &mut near, &mut stack);
+            assert_eq!(
+                &nb.near[nb.near_starts[a] as usize..nb.near_starts[a + 1] as usize],
+                &near[..],
+                "leaf {a} of {n}"
+            );
+            total += near.len();
+        }
+        assert_eq!(total, nb.near.len());
+    }
+}
