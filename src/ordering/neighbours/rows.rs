@@ -76,10 +76,9 @@ impl RowContext<'_> {
                     &self.frames[self.ids[self.starts[a] as usize + leaf.anchor_at] as usize],
                 );
                 // E_self + E of the module notes, each widened for rounding.
-                let u = &out.union;
-                let union = largest_residual(&map, &leaf.reference, |s| u.packed[s].p);
+                let union = largest_residual(&map, &leaf.reference, out.union.packed.iter().map(|e| e.p));
                 let roots = self.starts[a] as usize..self.starts[a + 1] as usize;
-                let own = largest_residual(&map, &leaf.own, |s| self.points[roots.start + s].0);
+                let own = largest_residual(&map, &leaf.own, self.points[roots].iter().map(|p| p.0));
                 let e = map.widen(own, leaf.radius) + map.widen(union, leaf.radius);
                 if map.rows_hold(leaf.margin, leaf.longest, e) {
                     certified = Some((map, e));
@@ -234,17 +233,20 @@ impl RowContext<'_> {
             // K_i: every root of S_i within the k-th distance plus the
             // margin (none when the row did not settle the k nearest); no
             // root of the union outside S_i is that near (module notes).
-            // Written over S_i's places (the write never passes the read).
+            // Stored nearest first at the reference (so that ranking them
+            // later mostly appends), by squared distance then place.
             let radius = if from_row && k > 0 { out.best[k - 1].0.sqrt() + leaf.margin } else { f32::NAN };
             let radius2 = radius * radius;
-            let mut to = set_start;
-            for q in 0..count {
-                if all_d2[q] <= radius2 {
-                    leaf.sets[to] = leaf.sets[set_start + q];
-                    to += 1;
-                }
-            }
-            leaf.sets.truncate(to);
+            out.order.clear();
+            out.order.extend(
+                (0..count)
+                    .filter(|&q| all_d2[q] <= radius2)
+                    .map(|q| (u64::from(all_d2[q].to_bits()) << 32) | u64::from(leaf.sets[set_start + q])),
+            );
+            out.order.sort_unstable();
+            leaf.sets.truncate(set_start);
+            leaf.sets.extend(out.order.iter().map(|&key| key as u32));
+            let to = leaf.sets.len();
             leaf.ends.push((leaf.ids.len() as u32, to as u32, radius));
             if !from_row {
                 self.nearest_beyond_rows(i, p, out);
@@ -385,6 +387,7 @@ pub(super) struct Chunk {
     pub(super) union: Union,
     pub(super) d2: Vec<f32>,
     pub(super) all_d2: Vec<f32>,
+    pub(super) order: Vec<u64>,
     pub(super) stack: Vec<u32>,
     pub(super) best: Vec<(f32, u32)>,
     /// Places in `roots` whose k nearest wait for a current tree.
@@ -432,12 +435,16 @@ pub(super) struct CachedLeaf {
     pub(super) ends: Vec<(u32, u32, f32)>,
 }
 
-/// The largest residual `|now(s) − M(reference[s])|` (NaN if any is not
-/// finite), from the squared residuals.
-fn largest_residual(map: &AnchorMap, reference: &[glam::Vec3], now: impl Fn(usize) -> glam::Vec3) -> f32 {
+/// The largest residual `|now − M(reference)|` over the pairs of
+/// `reference` and `now` (NaN if any is not finite or the lengths differ),
+/// from the squared residuals.
+fn largest_residual(map: &AnchorMap, reference: &[glam::Vec3], now: impl ExactSizeIterator<Item = glam::Vec3>) -> f32 {
+    if reference.len() != now.len() {
+        return f32::NAN;
+    }
     let (mut largest, mut finite) = (0.0f32, true);
-    for (s, &r) in reference.iter().enumerate() {
-        let e2 = map.residual2(r, now(s));
+    for (&r, p) in reference.iter().zip(now) {
+        let e2 = map.residual2(r, p);
         finite &= e2.is_finite();
         largest = largest.max(e2);
     }
@@ -486,16 +493,25 @@ pub(super) fn near_pairs(
             (true, false) => stack.extend([(x, q.children), (x, q.children + 1)]),
         }
     }
-    pairs.sort_unstable();
+    // By leaf (a counting sort), then each leaf's few near leaves sorted.
     starts.clear();
-    starts.resize(leaves + 1, 0);
-    near.clear();
+    starts.resize(leaves + 2, 0);
     for &pair in pairs.iter() {
-        starts[(pair >> 32) as usize + 1] += 1;
-        near.push(pair as u32);
+        starts[(pair >> 32) as usize + 2] += 1;
     }
     for a in 0..leaves {
-        starts[a + 1] += starts[a];
+        starts[a + 2] += starts[a + 1];
+    }
+    near.clear();
+    near.resize(pairs.len(), 0);
+    for &pair in pairs.iter() {
+        let at = &mut starts[(pair >> 32) as usize + 1];
+        near[*at as usize] = pair as u32;
+        *at += 1;
+    }
+    starts.truncate(leaves + 1);
+    for a in 0..leaves {
+        near[starts[a] as usize..starts[a + 1] as usize].sort_unstable();
     }
 }
 
