@@ -8,24 +8,18 @@
 //! count. A k-d tree (not a uniform grid) is used because root density
 //! varies over a body by the density field; the tree needs no cell size.
 //! Its leaves (up to 16 roots lying close together) also serve as cells
-//! for the obstacle candidates: a hierarchy of boxes over the leaves finds
-//! each leaf's leaves within reach, and each root compares itself with
-//! their roots, which costs far less than one radius query per root. The
+//! for the obstacle candidates: one traversal of a hierarchy of boxes over
+//! the leaves against itself finds every leaf's leaves within reach, and
+//! each root compares itself with their roots, which costs far less than
+//! one radius query per root. The
 //! leaves are shared out among the threads; each root's row and k nearest
 //! depend on the positions alone, so nothing depends on the thread count.
 //!
 //! From frame to frame the leaves (which roots go together) are kept while
-//! their boxes at the current pose stay compact, and each leaf keeps, from
-//! the pose where they were made, per root a superset of its row (every
-//! root within its reach plus a margin, with each one's slack) and a short
-//! list of candidates for its k nearest. A cheap certificate (the leaf's
-//! near leaves are still among those the lists were made from, and the
-//! roots have moved, relative to a rigid motion of the leaf, by less than
-//! the margin: [`reuse`]) says when those lists still hold; then a row is
-//! its superset filtered (only the entries whose slack the motion can
-//! have crossed are tested), else the leaf's lists are made again at the
-//! current pose. The roots do not move on the body, so most leaves keep
-//! their lists for many frames. None of this changes a row.
+//! their boxes at the current pose stay compact, and so is each leaf's
+//! sorted list of candidate roots while its near leaves stay the same: the
+//! roots do not move on the body, so most of a frame's work is the distance
+//! tests, run several lanes at a time. None of this changes a row.
 //!
 //! Thin parts (the two skins of a wing) put roots close in space that are far
 //! apart on the surface. Roots whose normals disagree strongly
@@ -35,7 +29,6 @@
 //! the adjustment checks those exactly.
 
 mod params;
-mod reuse;
 mod rows;
 mod state;
 #[cfg(test)]
@@ -77,14 +70,6 @@ pub struct Neighbourhoods {
     leaf_starts: Vec<u32>,
     /// Bumped at every new layout (0: none yet).
     layout_generation: u64,
-    /// Bumped at every new layout and whenever the reach or the parameters
-    /// change: the chunks' candidate lists hold for one key.
-    cache_key: u64,
-    /// The reach (as bits) and parameters the lists were made with.
-    reach_bits: Vec<u32>,
-    cache_params: Option<NeighbourParams>,
-    /// Leaves whose candidate lists the last rebuild made again.
-    leaves_remade: usize,
     /// Root count of the layout.
     layout_roots: usize,
     /// Sum of the leaves' box diagonals when the layout was made.
@@ -138,7 +123,7 @@ impl Neighbourhoods {
         self.tree_current = false;
         self.rebuild_rows(frames, reach, params);
         // The pairs follow from the k nearest alone: kept when those are
-        // the ones the pairs were made from (most frames).
+        // the ones the pairs were made from.
         if self.pairs_knn_offsets != self.knn_offsets || self.pairs_knn_indices != self.knn_indices {
             self.rebuild_pairs(frames.len());
             self.pairs_knn_offsets.clone_from(&self.knn_offsets);
@@ -152,7 +137,6 @@ impl Neighbourhoods {
         self.tree_current = true;
         self.tree.leaves(&mut self.leaf_ids, &mut self.leaf_starts);
         self.layout_generation += 1;
-        self.cache_key += 1;
         self.layout_roots = frames.len();
     }
 
@@ -173,12 +157,6 @@ impl Neighbourhoods {
                 });
             self.cells.push(Cell { lo, hi, reach });
         }
-    }
-
-    /// Leaves whose candidate lists the last rebuild made again at the
-    /// current pose (the others' were filtered), and the leaf count.
-    pub fn lists_remade(&self) -> (usize, usize) {
-        (self.leaves_remade, self.cells.len())
     }
 
     /// Sum of the leaves' box diagonals.
@@ -304,15 +282,6 @@ impl Neighbourhoods {
             self.gather_cells(frames, reach);
             self.layout_spread = self.spread();
         }
-        // Lists made with another reach or other parameters do not hold.
-        let same_reach =
-            self.reach_bits.len() == reach.len() && self.reach_bits.iter().zip(reach).all(|(&b, r)| b == r.to_bits());
-        if !same_reach || self.cache_params != Some(*params) {
-            self.cache_key += 1;
-            self.reach_bits.clear();
-            self.reach_bits.extend(reach.iter().map(|r| r.to_bits()));
-            self.cache_params = Some(*params);
-        }
         let ids = &self.leaf_ids;
         self.nodes.clear();
         if !self.cells.is_empty() {
@@ -347,19 +316,16 @@ impl Neighbourhoods {
             ids,
             starts: &self.leaf_starts,
             points: &self.points,
-            cells: &self.cells,
-            nodes: &self.nodes,
             near_starts: &self.near_starts,
             near: &self.near,
             tree: self.tree_current.then_some(&self.tree),
-            generation: self.cache_key,
+            generation: self.layout_generation,
         };
         self.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, chunk)| {
             let first = (c * per_chunk).min(leaves);
             let last = ((c + 1) * per_chunk).min(leaves);
             ctx.fill(first..last, chunk);
         });
-        self.leaves_remade = self.chunks[..chunks].iter().map(|c| c.leaves_remade).sum();
         // The k nearest the rows could not settle, with a tree over the
         // current positions (the layout's tree is stale).
         if self.chunks[..chunks].iter().any(|c| !c.deferred.is_empty()) {
