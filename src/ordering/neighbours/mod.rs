@@ -55,9 +55,6 @@ pub struct Neighbourhoods {
     knn_offsets: Vec<u32>,
     knn_indices: Vec<u32>,
     pairs: Vec<(u32, u32)>,
-    /// The k-nearest rows `pairs` was made from by the last rebuild.
-    pairs_knn_offsets: Vec<u32>,
-    pairs_knn_indices: Vec<u32>,
     obstacle_offsets: Vec<u32>,
     obstacle_indices: Vec<u32>,
     bucket_offsets: Vec<u32>,
@@ -122,13 +119,7 @@ impl Neighbourhoods {
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
         self.tree_current = false;
         self.rebuild_rows(frames, reach, params);
-        // The pairs follow from the k nearest alone: kept when those are
-        // the ones the pairs were made from.
-        if self.pairs_knn_offsets != self.knn_offsets || self.pairs_knn_indices != self.knn_indices {
-            self.rebuild_pairs(frames.len());
-            self.pairs_knn_offsets.clone_from(&self.knn_offsets);
-            self.pairs_knn_indices.clone_from(&self.knn_indices);
-        }
+        self.rebuild_pairs(frames.len());
     }
 
     /// A new leaf layout from a k-d tree over the current positions.

@@ -252,8 +252,7 @@ fn rows_match_the_exhaustive_search_through_small_steps_a_rigid_turn_and_a_fold(
         assert_eq!(nbs[0].pairs(), nbs[1].pairs(), "step {step} depends on the thread count");
     }
     assert!(nbs[1].layout_generation > 1, "the steps must also lay the leaves out again");
-    // One big jump back: the pairs (kept while the k nearest do not
-    // change) follow.
+    // One big jump back: the pairs follow.
     let folded = folding_strip(0.3, &mut crate::rng::Rng::new(5));
     let (rows, knn) = exhaustive(&folded, &reach, &params);
     let nb = &mut nbs[1];
