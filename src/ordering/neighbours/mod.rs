@@ -8,10 +8,9 @@
 //! count. A k-d tree (not a uniform grid) is used because root density
 //! varies over a body by the density field; the tree needs no cell size.
 //! Its leaves (up to 16 roots lying close together) also serve as cells
-//! for the obstacle candidates: one traversal of a hierarchy of boxes over
-//! the leaves against itself finds every leaf's leaves within reach, and
-//! each root compares itself with their roots, which costs far less than
-//! one radius query per root. The
+//! for the obstacle candidates: a hierarchy of boxes over the leaves finds
+//! each leaf's leaves within reach, and each root compares itself with
+//! their roots, which costs far less than one radius query per root. The
 //! leaves are shared out among the threads; each root's row and k nearest
 //! depend on the positions alone, so nothing depends on the thread count.
 //!
@@ -39,7 +38,7 @@ use crate::geometry::RootFrame;
 pub use params::NeighbourParams;
 use params::{row, sanitized_reach};
 use rayon::prelude::*;
-use rows::{Cell, Chunk, Node, RowContext, build_nodes, near_pairs};
+use rows::{Cell, Chunk, Node, RowContext, build_nodes};
 
 /// The leaf layout is kept while the sum of the leaves' box diagonals stays
 /// within this factor of its value when the layout was made: larger boxes
@@ -77,12 +76,6 @@ pub struct Neighbourhoods {
     points: Vec<(glam::Vec3, f32)>,
     cells: Vec<Cell>,
     nodes: Vec<Node>,
-    /// Each leaf's near leaves at the current pose (CSR), and the scratch
-    /// of the traversal that finds them.
-    near_starts: Vec<u32>,
-    near: Vec<u32>,
-    pair_stack: Vec<(u32, u32)>,
-    leaf_pairs: Vec<u64>,
     chunks: Vec<Chunk>,
     #[cfg(test)]
     scratch_indices: Vec<u32>,
@@ -278,19 +271,6 @@ impl Neighbourhoods {
         if !self.cells.is_empty() {
             build_nodes(&self.cells, 0, self.cells.len() as u32, &mut self.nodes);
         }
-        if !reach.is_empty() {
-            near_pairs(
-                &self.nodes,
-                self.cells.len(),
-                &mut self.near_starts,
-                &mut self.near,
-                &mut self.pair_stack,
-                &mut self.leaf_pairs,
-            );
-        } else {
-            self.near_starts.clear();
-            self.near.clear();
-        }
         let min_reach = reach.iter().fold(f32::INFINITY, |m, &r| m.min(sanitized_reach(r)));
         // Chunks of leaves of about equal size, a few per thread.
         let leaves = self.cells.len();
@@ -307,8 +287,8 @@ impl Neighbourhoods {
             ids,
             starts: &self.leaf_starts,
             points: &self.points,
-            near_starts: &self.near_starts,
-            near: &self.near,
+            cells: &self.cells,
+            nodes: &self.nodes,
             tree: self.tree_current.then_some(&self.tree),
             generation: self.layout_generation,
         };
@@ -341,8 +321,9 @@ impl Neighbourhoods {
                 offsets[i + 1] += offsets[i];
             }
         }
-        // (Not cleared: every place is written below, the rows partition them.)
+        self.obstacle_indices.clear();
         self.obstacle_indices.resize(self.obstacle_offsets[n] as usize, 0);
+        self.knn_indices.clear();
         self.knn_indices.resize(self.knn_offsets[n] as usize, 0);
         for chunk in chunks {
             let (mut at, mut knn_at) = (0usize, 0usize);

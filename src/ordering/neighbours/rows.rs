@@ -15,10 +15,8 @@ pub(super) struct RowContext<'a> {
     pub(super) ids: &'a [u32],
     pub(super) starts: &'a [u32],
     pub(super) points: &'a [(glam::Vec3, f32)],
-    /// Each leaf's near leaves at the current pose, as CSR ([`near_pairs`];
-    /// empty without reach).
-    pub(super) near_starts: &'a [u32],
-    pub(super) near: &'a [u32],
+    pub(super) cells: &'a [Cell],
+    pub(super) nodes: &'a [Node],
     /// A tree over the current positions, when there is one.
     pub(super) tree: Option<&'a KdTree>,
     /// The layout's generation (a chunk's cached unions are valid for it).
@@ -47,19 +45,33 @@ impl RowContext<'_> {
         }
         for (local, a) in leaves.clone().enumerate() {
             // The leaves within reach of leaf a (a included).
-            let near = match self.near_starts.get(a..a + 2) {
-                Some(&[lo, hi]) => &self.near[lo as usize..hi as usize],
-                _ => &[],
-            };
+            out.near.clear();
+            if !self.reach.is_empty() {
+                let cell = &self.cells[a];
+                out.stack.clear();
+                out.stack.push(0);
+                while let Some(x) = out.stack.pop() {
+                    let node = &self.nodes[x as usize];
+                    if !cell.may_reach(&node.cell) {
+                        continue;
+                    }
+                    if node.children == u32::MAX {
+                        out.near.push(node.leaf);
+                    } else {
+                        out.stack.push(node.children + 1);
+                        out.stack.push(node.children);
+                    }
+                }
+            }
             // Their roots sorted by index, so that every row comes out sorted.
             // (Sorted as packed (index, place in tree order) words: much
             // cheaper than sorting the points themselves.)
             let leaf = &mut out.cached[local];
-            if !reuse || leaf.near != near {
+            if !reuse || leaf.near != out.near {
                 leaf.near.clear();
-                leaf.near.extend_from_slice(near);
+                leaf.near.extend_from_slice(&out.near);
                 leaf.keys.clear();
-                for &b in near {
+                for &b in &out.near {
                     let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
                     leaf.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
                 }
@@ -160,8 +172,10 @@ pub(super) struct Chunk {
     pub(super) row_lens: Vec<u32>,
     pub(super) knn: Vec<u32>,
     pub(super) knn_lens: Vec<u32>,
+    pub(super) near: Vec<u32>,
     pub(super) union: Union,
     pub(super) d2: Vec<f32>,
+    pub(super) stack: Vec<u32>,
     pub(super) best: Vec<(f32, u32)>,
     /// Places in `roots` whose k nearest wait for a current tree.
     pub(super) deferred: Vec<u32>,
@@ -309,71 +323,6 @@ pub(super) fn within_mask(
             mask |= u32::from(d2[l] <= limit * limit) << l;
         }
         mask
-    }
-}
-
-/// Every leaf's near leaves (the leaves `b` with
-/// `cells[a].may_reach(&cells[b])`, `a` included, in increasing order) as
-/// CSR `starts`, `near`, from one traversal of the hierarchy against
-/// itself: a pair of boxes out of reach prunes every pair of their leaves
-/// (a box's gap is never larger than its leaves', and the test is
-/// symmetric bitwise), so no near pair is missed. One traversal for all
-/// leaves costs far less than one query per leaf.
-pub(super) fn near_pairs(
-    nodes: &[Node],
-    leaves: usize,
-    starts: &mut Vec<u32>,
-    near: &mut Vec<u32>,
-    stack: &mut Vec<(u32, u32)>,
-    pairs: &mut Vec<u64>,
-) {
-    pairs.clear();
-    stack.clear();
-    if !nodes.is_empty() {
-        stack.push((0, 0));
-    }
-    while let Some((x, y)) = stack.pop() {
-        let (p, q) = (&nodes[x as usize], &nodes[y as usize]);
-        if !p.cell.may_reach(&q.cell) {
-            continue;
-        }
-        match (p.children == u32::MAX, q.children == u32::MAX) {
-            (true, true) => {
-                let (a, b) = (u64::from(p.leaf), u64::from(q.leaf));
-                pairs.push((a << 32) | b);
-                if a != b {
-                    pairs.push((b << 32) | a);
-                }
-            }
-            // A node against itself: its halves against themselves and
-            // each other (each unordered pair of subtrees once).
-            _ if x == y => {
-                let c = p.children;
-                stack.extend([(c, c), (c + 1, c + 1), (c, c + 1)]);
-            }
-            (false, _) => stack.extend([(p.children, y), (p.children + 1, y)]),
-            (true, false) => stack.extend([(x, q.children), (x, q.children + 1)]),
-        }
-    }
-    // By leaf (a counting sort), then each leaf's few near leaves sorted.
-    starts.clear();
-    starts.resize(leaves + 2, 0);
-    for &pair in pairs.iter() {
-        starts[(pair >> 32) as usize + 2] += 1;
-    }
-    for a in 0..leaves {
-        starts[a + 2] += starts[a + 1];
-    }
-    near.clear();
-    near.resize(pairs.len(), 0);
-    for &pair in pairs.iter() {
-        let at = &mut starts[(pair >> 32) as usize + 1];
-        near[*at as usize] = pair as u32;
-        *at += 1;
-    }
-    starts.truncate(leaves + 1);
-    for a in 0..leaves {
-        near[starts[a] as usize..starts[a + 1] as usize].sort_unstable();
     }
 }
 

@@ -267,30 +267,3 @@ fn rows_match_the_exhaustive_search_through_small_steps_a_rigid_turn_and_a_fold(
         assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, jump");
     }
 }
-
-#[test]
-fn one_traversal_finds_every_leafs_near_leaves() {
-    let mut rng = crate::rng::Rng::new(3);
-    for (n, spread) in [(1usize, 1.0f32), (40, 2.0), (3000, 30.0)] {
-        let frames: Vec<RootFrame> = (0..n)
-            .map(|_| {
-                let p = Vec3::new(rng.next_f32(), rng.next_f32(), 0.2 * rng.next_f32()) * spread;
-                RootFrame::from_normal_and_direction(p, Vec3::Z, Vec3::X).unwrap()
-            })
-            .collect();
-        let reach: Vec<f32> = (0..n).map(|_| 0.3 + rng.next_f32()).collect();
-        let mut nb = Neighbourhoods::new();
-        nb.rebuild(&frames, &reach, &NeighbourParams::default());
-        // Against every pair of leaves.
-        let leaves = nb.cells.len();
-        for a in 0..leaves {
-            let near: Vec<u32> = (0..leaves as u32).filter(|&b| nb.cells[a].may_reach(&nb.cells[b as usize])).collect();
-            assert_eq!(
-                &nb.near[nb.near_starts[a] as usize..nb.near_starts[a + 1] as usize],
-                &near[..],
-                "leaf {a} of {n}"
-            );
-        }
-        assert_eq!(nb.near_starts.len(), leaves + 1);
-    }
-}
