@@ -218,3 +218,52 @@ fn hostile_rows_are_refused() {
         assert_eq!(err.kind(), ErrorKind::InvalidState, "{what}");
     }
 }
+
+#[test]
+fn rows_match_the_exhaustive_search_through_small_steps_a_rigid_turn_and_a_fold() {
+    let params = NeighbourParams::default();
+    let reach: Vec<f32> = (0..48 * 24).map(|k| if k % 97 == 5 { 0.0 } else { 1.2 + (k % 7) as f32 * 0.2 }).collect();
+    let pools: Vec<rayon::ThreadPool> =
+        [1, 2].iter().map(|&t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap()).collect();
+    // One `Neighbourhoods` per thread count, each stepped through every
+    // pose: small steps of the fold (the layout and each leaf's cached
+    // candidates kept from frame to frame while they can be), the whole
+    // strip turning and moving as it goes.
+    let mut nbs = [Neighbourhoods::new(), Neighbourhoods::new()];
+    for step in 0..=40 {
+        let t = step as f32 / 40.0;
+        let turn = glam::Quat::from_rotation_z(0.05 * step as f32) * glam::Quat::from_rotation_x(0.02 * step as f32);
+        let shift = Vec3::new(0.3, -0.2, 0.1) * step as f32;
+        let frames: Vec<RootFrame> = folding_strip(t, &mut crate::rng::Rng::new(5))
+            .iter()
+            .map(|f| {
+                RootFrame::from_normal_and_direction(turn * f.position + shift, turn * f.normal, turn * f.tangent)
+                    .unwrap()
+            })
+            .collect();
+        let (rows, knn) = exhaustive(&frames, &reach, &params);
+        for (nb, pool) in nbs.iter_mut().zip(&pools) {
+            pool.install(|| nb.rebuild(&frames, &reach, &params));
+            for i in 0..frames.len() {
+                assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, step {step}");
+                assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, step {step}");
+            }
+        }
+        assert_eq!(nbs[0].pairs(), nbs[1].pairs(), "step {step} depends on the thread count");
+    }
+    assert!(nbs[1].layout_generation > 1, "the steps must also lay the leaves out again");
+    // One big jump back: the pairs follow.
+    let folded = folding_strip(0.3, &mut crate::rng::Rng::new(5));
+    let (rows, knn) = exhaustive(&folded, &reach, &params);
+    let nb = &mut nbs[1];
+    nb.rebuild(&folded, &reach, &params);
+    let mut pairs: Vec<(u32, u32)> =
+        (0..folded.len() as u32).flat_map(|i| knn[i as usize].iter().map(move |&j| (i.min(j), i.max(j)))).collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    assert_eq!(nb.pairs(), &pairs[..]);
+    for i in 0..folded.len() {
+        assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, jump");
+        assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, jump");
+    }
+}
