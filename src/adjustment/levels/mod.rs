@@ -104,9 +104,9 @@ pub struct Adjuster {
     settle_rate: f32,
     /// Which feathers the last run held back from their solved pose.
     settling: Vec<bool>,
-    /// Verifying by levels on several threads: the suspects checked ahead
-    /// of the ordered pass, in parallel, against their obstacles as they
-    /// were before it ([`Precheck`]), by feather.
+    /// Verifying (not sparse): the suspects checked ahead of the ordered
+    /// pass, in parallel, against their obstacles as they were before it
+    /// ([`Precheck`]), by feather.
     prechecked: Vec<Precheck>,
     /// The feathers checked ahead, in order.
     precheck_items: Vec<u32>,
