@@ -751,6 +751,15 @@ typedef struct PlumageFrameStats {
    * The largest such change of any feather in this call, degrees.
    */
   double largest_pose_change_deg;
+  /**
+   * Re-adjusted segmented feathers whose bends were draped (appended).
+   */
+  uint64_t draped;
+  /**
+   * Of those, the ones the swept drape left to the slower descent by
+   * exact checks (appended).
+   */
+  uint64_t drape_descents;
 } PlumageFrameStats;
 
 /**

@@ -12,7 +12,7 @@ const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
 /// figures hold the neighbourhood time and the level count. 6: no timings
 /// (the blob is byte-reproducible). 7: the settling flags. Blobs of
 /// another version are refused.
-pub(crate) const FORMAT_VERSION: u32 = 7;
+pub(crate) const FORMAT_VERSION: u32 = 8;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 

@@ -66,6 +66,12 @@ pub struct FrameReport {
     pub cycles_broken: usize,
     /// Feathers whose pitch or roll hit a limit.
     pub clamped: usize,
+    /// Re-adjusted segmented feathers whose bends were draped (DESIGN.md
+    /// §4, bending).
+    pub draped: usize,
+    /// Of those, the ones the swept drape left to the descent by exact
+    /// checks (it found no room, or its pose failed the exact check).
+    pub drape_descents: usize,
     /// Seconds spent re-posing roots and reordering.
     pub reorder_seconds: f64,
     /// Seconds spent in the height-field adjustment.

@@ -37,6 +37,10 @@ void put_validation(json& j, const PlumageValidation& v) {
 void put_adjustment(json& j, const PlumageFrameStats& s) {
     if (PLUMAGE_FILLED(s, collision_tests_per_feather)) put(j, "collision_tests_per_feather", s.collision_tests_per_feather);
     if (PLUMAGE_FILLED(s, clamped)) j["clamped"] = s.clamped;
+    if (PLUMAGE_FILLED(s, drape_descents)) {
+        j["draped"] = s.draped;
+        j["drape_descents"] = s.drape_descents;
+    }
     if (PLUMAGE_FILLED(s, levels)) j["levels"] = s.levels;
     if (PLUMAGE_FILLED(s, neighbourhood_seconds)) put(j, "neighbourhood_seconds", s.neighbourhood_seconds);
 }

@@ -5,11 +5,13 @@
 //! keeps an animated bent coat from popping.
 
 use super::checks::{CheckHints, FeatherInPlace, boxes_clear, exact_check};
-use super::{AdjustParams, HeightField};
+use super::sweep::{fill_swept_triangles, swept_drape};
+use super::{AdjustParams, HeightField, ObstacleFeather};
+
 use crate::feather::{FeatherPose, segment_triangles};
 use crate::validation::FeatherBoxes;
 
-/// Angle steps (radians) of the descent of a segment in [`drape`]; the
+/// Angle steps (radians) of the descent of a segment in [`descent_drape`]; the
 /// first contact found is then narrowed by [`DRAPE_BISECTIONS`] halvings
 /// (to about 0.4°).
 const DRAPE_STEP: f32 = 0.1;
@@ -19,10 +21,31 @@ const DRAPE_BISECTIONS: usize = 4;
 /// (each backtrack raises a segment by a [`DRAPE_STEP`]).
 const MAX_DRAPE_DESCENTS: usize = 16;
 /// Halvings of the raise of an earlier segment that makes room for a later
-/// one in [`drape`] (to 0.4 rad / 64, about 0.4°).
+/// one in [`descent_drape`] (to 0.4 rad / 64, about 0.4°).
 const DRAPE_RAISE_BISECTIONS: usize = 6;
 
-/// Drapes a segmented feather (DESIGN.md §4, bending). The straight pose
+/// Drapes a segmented feather (DESIGN.md §4, bending) from its straight
+/// pose: the swept drape ([`super::sweep`]) confirmed by one exact check of
+/// the whole feather, else the descent by exact checks ([`descent_drape`]).
+/// The second of the pair tells whether the descent was taken.
+pub(super) fn drape(
+    at: &FeatherInPlace<'_>,
+    obstacles: &[ObstacleFeather],
+    straight: FeatherPose,
+    params: &AdjustParams,
+    scratch: &mut HeightField,
+) -> (FeatherPose, bool) {
+    fill_swept_triangles(scratch, obstacles, straight.roll);
+    let sized = at.shape.scaled(straight.scale);
+    if let Some(pose) = swept_drape(scratch, &sized, straight, params)
+        && exact_check(at, pose, scratch, true, &mut CheckHints::default())
+    {
+        return (pose, false);
+    }
+    (descent_drape(at, straight, params, scratch), true)
+}
+
+/// The drape by exact checks. The straight pose
 /// gives the roll and an upper bound on the root segment's pitch (the
 /// whole straight feather is clear there); then segment by segment from
 /// the root, each takes the lowest angle at which it is clear by the exact
@@ -40,17 +63,12 @@ const DRAPE_RAISE_BISECTIONS: usize = 6;
 /// the nearest earlier segment that can make room is raised, by bisection,
 /// to the lowest angle at which it and every segment after it up to the
 /// blocked one, each at its highest, are clear; the drape goes on from the
-/// segment after it. The root can rise up to the straight pitch. Without
-/// this, about 60 % of the Flamingo's feathers kept the straight pose
-/// because one outer segment could not follow. The raise is bisected rather
-/// than stepped so that it follows the geometry continuously: with the
-/// rest positions moved by 1e-5, 1e-4 and 1e-3 of the Fox's size, a full
-/// re-solve changed 5.5, 12.4 and 31 % of the feathers by more than 5°,
-/// against 6.5, 17.1 and 45 % with raises in [`DRAPE_STEP`]s (the kite:
-/// 0.2, 1.8 and 9.3 %), for tips about 0.02 lengths higher. After
-/// [`MAX_DRAPE_DESCENTS`] descents, or with no segment able to make room,
-/// the feather keeps its straight pose, which was clear.
-pub(super) fn drape(
+/// segment after it. The root can rise up to the straight pitch. The raise
+/// is bisected rather than stepped so that it follows the geometry
+/// continuously (fewer pops under small motions; BENCHMARKS.md, "Bent
+/// feathers"). After [`MAX_DRAPE_DESCENTS`] descents, or with no segment
+/// able to make room, the feather keeps its straight pose, which was clear.
+fn descent_drape(
     at: &FeatherInPlace<'_>,
     straight: FeatherPose,
     params: &AdjustParams,

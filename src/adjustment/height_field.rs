@@ -159,6 +159,12 @@ pub struct HeightField {
     /// The rasterised obstacles' triangles in the root frame (kept for
     /// the refills of one feather's smaller sizes).
     pub(crate) local_obstacles: Vec<FeatherTriangles>,
+    /// The obstacles' and the skin's triangles in the roll frame (scratch
+    /// of the swept drape, see `sweep::fill_swept_triangles`).
+    pub(crate) swept: Vec<super::sweep::SweptTriangle>,
+    /// The skin triangles rasterised into the body layer, in the root
+    /// frame, kept for a segmented feather's drape.
+    pub(crate) local_body: Vec<[Vec3; 3]>,
 }
 
 impl HeightField {
@@ -191,6 +197,8 @@ impl HeightField {
             boxes: Vec::new(),
             sweep_obstacles: Vec::new(),
             local_obstacles: Vec::new(),
+            swept: Vec::new(),
+            local_body: Vec::new(),
         };
         f.set_resolution(u, v);
         f
@@ -335,6 +343,9 @@ impl HeightField {
         let band_box = self.world_bounds(frame, self.body_floor, band);
         body.triangles_in_box(&band_box, &mut ids);
         let mut rises = false;
+        // A segmented feather's drape sweeps the skin triangles themselves.
+        let keep = self.shape.segment_count() > 1;
+        self.local_body.clear();
         for &t in &ids {
             if body.normal(t).dot(frame.normal) <= BODY_FACING_MIN {
                 continue;
@@ -342,6 +353,9 @@ impl HeightField {
             let local = map.triangle(&body.corners(t));
             rises |= local[0].z.max(local[1].z).max(local[2].z) >= 0.9 * band;
             self.rasterise(Layer::Body, local, 0.0);
+            if keep {
+                self.local_body.push(local);
+            }
         }
         if rises {
             body.triangles_in_box(&self.world_bounds(frame, self.body_floor, reach), &mut ids);
@@ -354,6 +368,9 @@ impl HeightField {
                 // Triangles wholly within the band are left to the first search.
                 if local.iter().any(|p| p.z > band || p.z < self.body_floor) {
                     self.rasterise(Layer::Body, local, 0.0);
+                    if keep {
+                        self.local_body.push(local);
+                    }
                 }
             }
         }

@@ -27,6 +27,7 @@ mod obstacle;
 mod pitch_roll;
 mod settle;
 mod steps;
+mod sweep;
 
 pub use height_field::HeightField;
 pub use levels::{AdjustStats, Adjuster, CandidateLists, OrderedRun, Selection, adjust_in_order};
@@ -161,4 +162,20 @@ pub struct AdjustOutcome {
     /// Whether a pitch or roll limit bound (the feather may then touch an
     /// obstacle or stand at its limit).
     pub clamped: bool,
+    /// How a segmented feather's bends were found.
+    pub drape: DrapeRoute,
+}
+
+/// How the adjustment found a feather's bends (DESIGN.md §4, bending).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DrapeRoute {
+    /// Not draped: a kite, a feather left straight (no bend limit) or left
+    /// out.
+    #[default]
+    Straight,
+    /// The swept drape, confirmed by one exact check.
+    Swept,
+    /// The descent by exact checks, where the swept drape found no room or
+    /// its pose failed the check.
+    Descent,
 }

@@ -9,7 +9,7 @@ use super::drape::drape;
 use super::height_field::{JUDGE_FRACTION, LocalMap};
 use super::obstacle::ObstacleBoxes;
 use super::pitch_roll::choose_pose;
-use super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
+use super::{AdjustOutcome, AdjustParams, AdjustSteps, DrapeRoute, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, MAX_JOINTS};
 use crate::geometry::RootFrame;
@@ -84,8 +84,9 @@ pub(crate) fn adjust_feather_boxed(
     if at.shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
         return straight;
     }
-    let draped = drape(at, straight.pose, params, scratch);
-    AdjustOutcome { pose: draped, ..straight }
+    let (draped, descended) = drape(at, obstacles, straight.pose, params, scratch);
+    let route = if descended { DrapeRoute::Descent } else { DrapeRoute::Swept };
+    AdjustOutcome { pose: draped, drape: route, ..straight }
 }
 
 /// The straight feather's pose (all joints unbent): the three steps on the
@@ -138,7 +139,12 @@ fn straight_pose(
             }
             if !choice.too_steep && exact_check(at, choice.pose, scratch, relaxed, &mut hints) {
                 if scale == 1.0 {
-                    return AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped };
+                    return AdjustOutcome {
+                        pose: choice.pose,
+                        collision_tests,
+                        clamped: choice.clamped,
+                        drape: DrapeRoute::Straight,
+                    };
                 }
                 break 'sizes Some(choice);
             }
@@ -170,11 +176,18 @@ fn straight_pose(
         None => (0.0, params.max_pitch),
     };
     if let Some(pose) = exact_pitch_sweep(at, params, scratch, smallest, max_pitch, &mut hints) {
-        return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0 };
+        return AdjustOutcome { pose, collision_tests, clamped: pose.scale < 1.0, drape: DrapeRoute::Straight };
     }
     match found {
-        Some(choice) => AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped },
-        None => AdjustOutcome { pose: FeatherPose { scale: 0.0, ..last }, collision_tests, clamped: true },
+        Some(choice) => {
+            AdjustOutcome { pose: choice.pose, collision_tests, clamped: choice.clamped, drape: DrapeRoute::Straight }
+        }
+        None => AdjustOutcome {
+            pose: FeatherPose { scale: 0.0, ..last },
+            collision_tests,
+            clamped: true,
+            drape: DrapeRoute::Straight,
+        },
     }
 }
 

@@ -53,6 +53,8 @@ impl Coat {
             reversals_refused,
             cycles_broken,
             clamped,
+            draped,
+            drape_descents,
             reorder_seconds: _,
             adjust_seconds: _,
             step_seconds: _,
@@ -64,6 +66,7 @@ impl Coat {
         w.u64(collision_tests);
         [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
         w.u64(levels as u64);
+        [draped, drape_descents].iter().for_each(|&c| w.u64(c as u64));
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
         self.staleness.write_state(w);
@@ -120,6 +123,8 @@ impl Coat {
             step_seconds: 0.0,
             neighbourhood_seconds: 0.0,
             levels: count(r)?,
+            draped: count(r)?,
+            drape_descents: count(r)?,
         };
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
         let order = PriorityOrder::read_state(r, n)?;

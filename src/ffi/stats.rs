@@ -117,6 +117,11 @@ pub struct PlumageFrameStats {
     pub pops: u64,
     /// The largest such change of any feather in this call, degrees.
     pub largest_pose_change_deg: f64,
+    /// Re-adjusted segmented feathers whose bends were draped (appended).
+    pub draped: u64,
+    /// Of those, the ones the swept drape left to the slower descent by
+    /// exact checks (appended).
+    pub drape_descents: u64,
 }
 
 /// The layout of `PlumageFrameStats` before `neighbourhood_seconds` was
@@ -129,7 +134,7 @@ const _: () = {
     use std::mem::size_of;
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 19);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 21);
 };
 
 /// Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
@@ -228,6 +233,8 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
                 levels: r.levels as u64,
                 pops: system.pose_changes().pops as u64,
                 largest_pose_change_deg: f64::from(system.pose_changes().largest).to_degrees(),
+                draped: r.draped as u64,
+                drape_descents: r.drape_descents as u64,
             })
         })
     }

@@ -82,6 +82,8 @@ pub fn solve_beside<R: Send>(
         reversals_refused: 0,
         cycles_broken: 0,
         clamped: stats.clamped,
+        draped: stats.draped,
+        drape_descents: stats.drape_descents,
         reorder_seconds: coat.ordering_report.seconds,
         adjust_seconds: stats.seconds,
         step_seconds: start.elapsed().as_secs_f64(),

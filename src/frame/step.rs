@@ -261,6 +261,8 @@ pub fn step_coat(
             stats.levels += more.adjusted + more.verified;
             // A feather adjusted in both passes may be counted clamped twice.
             stats.clamped = (stats.clamped + more.clamped).min(stats.adjusted);
+            stats.draped = (stats.draped + more.draped).min(stats.adjusted);
+            stats.drape_descents = (stats.drape_descents + more.drape_descents).min(stats.draped);
             stats.seconds += more.seconds;
         }
         stats
@@ -270,6 +272,8 @@ pub fn step_coat(
     report.verified = stats.verified;
     report.collision_tests = stats.collision_tests;
     report.clamped = stats.clamped;
+    report.draped = stats.draped;
+    report.drape_descents = stats.drape_descents;
     report.adjust_seconds = stats.seconds;
     report.levels = stats.levels;
     report.step_seconds = start.elapsed().as_secs_f64();

@@ -8,7 +8,7 @@ mod exact;
 mod lie;
 
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
-pub(crate) use exact::{BodyScratch, BoxedTriangles, FeatherBoxes};
+pub(crate) use exact::{BodyScratch, BoxedTriangles, FeatherBoxes, ROOT_ALLOWANCE};
 pub use exact::{body_penetrations, feather_beyond_root};
 // Only the adjustment's tests use the plane directly.
 #[cfg(test)]

@@ -167,6 +167,8 @@ class FrameStats(ctypes.Structure):
         ("levels", c_uint64),
         ("pops", c_uint64),
         ("largest_pose_change_deg", ctypes.c_double),
+        ("draped", c_uint64),
+        ("drape_descents", c_uint64),
     ]
 
 

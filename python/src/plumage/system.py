@@ -107,6 +107,8 @@ class FrameStats:
     levels: int
     pops: int
     largest_pose_change_deg: float
+    draped: int
+    drape_descents: int
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@
 
 use super::checks::bounding_sphere;
 use super::obstacle::ObstacleBoxes;
-use super::{AdjustParams, AdjustSteps, HeightField};
+use super::{AdjustParams, AdjustSteps, DrapeRoute, HeightField};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
@@ -62,6 +62,12 @@ pub struct AdjustStats {
     pub collision_tests: u64,
     /// Adjusted feathers where a pitch or roll limit bound.
     pub clamped: usize,
+    /// Adjusted segmented feathers whose bends were draped (the swept
+    /// drape or its fallback).
+    pub draped: usize,
+    /// Of those, the ones the swept drape left to the descent by exact
+    /// checks.
+    pub drape_descents: usize,
     /// Feathers checked exactly and left as they were
     /// ([`Selection::Verify`]).
     pub verified: usize,
@@ -484,6 +490,8 @@ impl Adjuster {
         stats.adjusted += 1;
         stats.collision_tests += u64::from(o.collision_tests);
         stats.clamped += usize::from(o.clamped);
+        stats.draped += usize::from(o.drape != DrapeRoute::Straight);
+        stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
     }
 
     /// The scope of a sparse run to begin with: the selected feathers.

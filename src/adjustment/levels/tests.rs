@@ -91,7 +91,14 @@ fn a_feather_lifts_at_once_and_settles_over_frames() {
             assert!(!scene.meet(&poses), "S = {segments}: B never passes through A");
             let change = crate::feather::pose_change(&before, &poses[1]);
             assert!(change <= rate + 1e-6, "S = {segments}: B moved by {change} in one frame");
-            assert_eq!(adjuster.settling()[1], poses[1] != solved[1]);
+            // Settling goes on until the pose, or (a bent feather) until
+            // its tip is within the settled gap of the solved tip.
+            let tip_high = super::super::settle::tip_above(&scene.frames[1], &scene.shapes[1], poses[1], solved[1]);
+            if adjuster.settling()[1] {
+                assert!(poses[1] != solved[1]);
+            } else {
+                assert!(poses[1] == solved[1] || (segments > 1 && !tip_high), "S = {segments}: stopped settling early");
+            }
             frames_to_settle += 1;
             assert!(frames_to_settle < 200, "S = {segments}: B never settles");
         }
