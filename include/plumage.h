@@ -819,6 +819,20 @@ typedef struct PlumageValidation {
    * feather length off the skin (bristles).
    */
   double bristle_percent;
+  /**
+   * Median over placed feathers of the tip height divided by the stack
+   * floor (appended): the thicknesses of the other feathers whose
+   * triangles cross the segment from the tip to its nearest body point,
+   * summed (at least the feather's own thickness), over its length. 1
+   * means the tips lie on the feathers stacked beneath them; larger, that
+   * they stand higher than the stack forces.
+   */
+  double stack_efficiency;
+  /**
+   * Median number of feathers beneath a placed feather's tip (those
+   * counted in `stack_efficiency`).
+   */
+  double stack_depth_median;
 } PlumageValidation;
 
 /**
@@ -1301,7 +1315,8 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
 
 /**
  * Runs the exact validation (triangle–triangle intersections, body
- * penetrations, coverage, mean pitch) on the current feathers. Only reads
+ * penetrations, coverage, mean pitch, tip heights and stacks) on the
+ * current feathers. Only reads
  * the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist. Reports
  * PLUMAGE_PHASE_VALIDATING to the system's progress callback, which may stop
  * it (PLUMAGE_STATUS_INTERRUPTED, no result written).
@@ -1322,7 +1337,8 @@ uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct Plumage
  * feather still counts as an obstacle and as a cover: `intersecting_pairs`
  * counts the pairs with at least one feather rooted on the part (so a
  * pair across two parts counts in both); `body_penetrations`,
- * `mean_pitch_deg` and the tip heights are those of the part's feathers;
+ * `mean_pitch_deg`, the tip heights and the stack figures are those of
+ * the part's feathers (any feather may lie beneath their tips);
  * the coverage probes are drawn on the part's skin (as many per feather as
  * the whole validation draws). Only reads the system.
  * PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's

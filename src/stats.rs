@@ -143,6 +143,13 @@ pub struct ValidationReport {
     pub tip_height_p90: f64,
     /// Percentage of placed feathers whose tip stands more than half a length off the skin.
     pub bristle_percent: f64,
+    /// Median over placed feathers of the tip height over the stack floor:
+    /// the thicknesses of the feathers beneath the tip summed (at least the
+    /// feather's own thickness), in feather lengths. 1 means the tips lie on
+    /// the feathers stacked beneath them; larger, higher than the stack forces.
+    pub stack_efficiency: f64,
+    /// Median number of feathers beneath a placed feather's tip.
+    pub stack_depth_median: f64,
 }
 
 /// One feather as the host sees it.

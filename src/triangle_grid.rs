@@ -36,6 +36,12 @@ impl Aabb {
         Self { min: t[0].min(t[1]).min(t[2]), max: t[0].max(t[1]).max(t[2]) }
     }
 
+    /// The box of the segment from `a` to `b`.
+    #[inline]
+    pub fn of_segment(a: Vec3, b: Vec3) -> Self {
+        Self { min: a.min(b), max: a.max(b) }
+    }
+
     /// The box around a point with half size `r` on every axis.
     #[inline]
     pub fn around(p: Vec3, r: f32) -> Self {

@@ -463,8 +463,9 @@ fn feather_geometry_copy_out() {
     unsafe { plumage_system_destroy(sys) };
 }
 
-/// Validation: the coat figures appended to `PlumageValidation`, and an
-/// older, shorter struct (up to `mean_pitch_deg`) filled up to its size.
+/// Validation: the coat figures appended to `PlumageValidation`, and
+/// older, shorter structs (up to `mean_pitch_deg`, up to `bristle_percent`)
+/// filled up to their size.
 #[test]
 fn validation_reports_tip_heights_and_fills_older_structs() {
     let (pos, idx) = grid_soup();
@@ -474,6 +475,15 @@ fn validation_reports_tip_heights_and_fills_older_structs() {
     assert_eq!(unsafe { plumage_system_validate(sys, &mut v) }, PLUMAGE_STATUS_OK);
     assert!(v.tip_height_median >= 0.0 && v.tip_height_median <= v.tip_height_p90 && v.tip_height_p90 <= 1.0);
     assert!((0.0..=100.0).contains(&v.bristle_percent));
+    assert!(v.stack_efficiency.is_finite() && v.stack_efficiency > 0.0, "{}", v.stack_efficiency);
+    assert!(v.stack_depth_median >= 0.0 && v.stack_depth_median.fract() == 0.0);
+    // The layout before the stack figures: filled up to `bristle_percent`.
+    let before_stacks = std::mem::offset_of!(PlumageValidation, stack_efficiency);
+    let mut previous =
+        PlumageValidation { struct_size: before_stacks as u32, stack_efficiency: -1.0, ..Default::default() };
+    assert_eq!(unsafe { plumage_system_validate(sys, &mut previous) }, PLUMAGE_STATUS_OK);
+    assert_eq!(previous.struct_size as usize, before_stacks);
+    assert_eq!((previous.bristle_percent, previous.stack_efficiency), (v.bristle_percent, -1.0));
     let old = std::mem::offset_of!(PlumageValidation, probes);
     let mut short = PlumageValidation { struct_size: old as u32, tip_height_p90: -3.0, ..Default::default() };
     assert_eq!(unsafe { plumage_system_validate(sys, &mut short) }, PLUMAGE_STATUS_OK);

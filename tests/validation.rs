@@ -9,7 +9,7 @@ use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
 use plumage::validation::{
     ProbeSkin, ValidationInput, body_penetrations, coverage, intersecting_pairs, mean_pitch_deg, triangles_intersect,
-    triangles_intersect_f64, validate,
+    triangles_intersect_f64, validate, validate_part,
 };
 use proptest::prelude::*;
 
@@ -293,28 +293,73 @@ fn mean_pitch_is_in_degrees() {
     assert_eq!(mean_pitch_deg(&[]), 0.0);
 }
 
+/// A validation of `feathers` (their triangles `tris`) over `body`, with
+/// 2000 coverage probes on `skin`.
+fn input_of<'a>(
+    feathers: &'a (Vec<RootFrame>, Vec<FeatherShape>, Vec<FeatherPose>),
+    tris: &'a [FeatherTriangles],
+    body: &'a BodyIndex,
+    skin: &'a ProbeSkin<'a>,
+) -> ValidationInput<'a> {
+    let (frames, shapes, poses) = feathers;
+    ValidationInput { feather_triangles: tris, frames, shapes, poses, body, skin, probes: 2000, seed: 4 }
+}
+
 #[test]
 fn validation_is_the_same_at_1_2_and_4_threads() {
-    let (frames, shapes, poses) = random_feathers(300, 8);
-    let tris = posed(&frames, &shapes, &poses);
+    let feathers = random_feathers(300, 8);
+    let tris = posed(&feathers.0, &feathers.1, &feathers.2);
     let (pos, mesh, body) = plane_body(6.0);
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let skin = ProbeSkin::whole(&pos, &mesh);
-        let input = ValidationInput {
-            feather_triangles: &tris,
-            frames: &frames,
-            shapes: &shapes,
-            poses: &poses,
-            body: &body,
-            skin: &skin,
-            probes: 2000,
-            seed: 4,
-        };
-        pool.install(|| validate(&input))
+        pool.install(|| validate(&input_of(&feathers, &tris, &body, &skin)))
     };
     let one = run(1);
     assert!(!one.intersecting_pairs.is_empty() && !one.body_penetrations.is_empty());
     assert_eq!(one, run(2));
     assert_eq!(one, run(4));
+}
+
+/// Five flat feathers stacked on a floor, each tip over the vanes of every
+/// feather below it, feather k standing `k·(thickness + gap) + clearance`
+/// up: the tip of feather k has k feathers beneath it.
+fn stacked_on_a_floor(gap: f32) -> (Vec<RootFrame>, Vec<FeatherShape>, Vec<FeatherPose>) {
+    let shape = FeatherShape::for_spacing(1.0);
+    let frames = (0..5)
+        .map(|k| {
+            let root = Vec3::new(
+                (4 - k) as f32 * 0.5,
+                k as f32 * 0.05,
+                k as f32 * (shape.thickness + gap) + 0.1 * shape.thickness,
+            );
+            RootFrame::from_normal_and_direction(root, Vec3::Z, Vec3::X).unwrap()
+        })
+        .collect();
+    (frames, vec![shape; 5], vec![FeatherPose::default(); 5])
+}
+
+#[test]
+fn tips_on_their_stack_have_a_stack_efficiency_near_1_and_lifted_ones_higher() {
+    let (pos, mesh, body) = plane_body(10.0);
+    let skin = ProbeSkin::whole(&pos, &mesh);
+    let check = |gap: f32| {
+        let feathers = stacked_on_a_floor(gap);
+        let tris = posed(&feathers.0, &feathers.1, &feathers.2);
+        let input = input_of(&feathers, &tris, &body, &skin);
+        let top = validate_part(&input, &[false, false, false, false, true]).tip_stacks;
+        (validate(&input).tip_stacks, top)
+    };
+    // Tip heights over floors: 0.1 (on the skin, over its own thickness),
+    // then 1 + 0.1/k for k feathers beneath; the median is k = 3's.
+    let (resting, top) = check(0.0);
+    assert_eq!((resting.feathers, resting.depth_median), (5, 2.0));
+    assert!((resting.efficiency - (1.0 + 0.1 / 3.0)).abs() < 1e-4, "{resting:?}");
+    // The part's figure is its own feather's, every feather below counting.
+    assert_eq!((top.feathers, top.depth_median), (1, 4.0));
+    assert!((top.efficiency - (1.0 + 0.1 / 4.0)).abs() < 1e-4, "{top:?}");
+    // A gap of one thickness between layers doubles the height over each stack.
+    let (lifted, _) = check(FeatherShape::for_spacing(1.0).thickness);
+    assert_eq!(lifted.depth_median, 2.0);
+    assert!((lifted.efficiency - (2.0 + 0.1 / 3.0)).abs() < 1e-4, "{lifted:?}");
 }

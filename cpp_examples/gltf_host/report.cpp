@@ -31,6 +31,8 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, tip_height_median)) put(j, "tip_height_median", v.tip_height_median);
     if (PLUMAGE_FILLED(v, tip_height_p90)) put(j, "tip_height_p90", v.tip_height_p90);
     if (PLUMAGE_FILLED(v, bristle_percent)) put(j, "bristle_percent", v.bristle_percent);
+    if (PLUMAGE_FILLED(v, stack_efficiency)) put(j, "stack_efficiency", v.stack_efficiency);
+    if (PLUMAGE_FILLED(v, stack_depth_median)) put(j, "stack_depth_median", v.stack_depth_median);
 }
 
 // The adjustment's figures, shared by `static` and each frame.
@@ -93,6 +95,7 @@ json summarise(const json& frames, bool whole) {
     add("max_tip_height_median", "tip_height_median", 2);
     add("max_tip_height_p90", "tip_height_p90", 2);
     add("max_bristle_percent", "bristle_percent", 2);
+    add("max_stack_efficiency", "stack_efficiency", 2);
     add("mean_pops_percent", "pops_percent", 0);
     add("max_pops_percent", "pops_percent", 2);
     return s;

@@ -454,6 +454,8 @@ void report_summary() {
         v.tip_height_median = 0.1 + 0.05 * k;
         v.tip_height_p90 = 0.25 - 0.1 * k;
         v.bristle_percent = 1.5 * k;
+        v.stack_efficiency = 1.75 - 0.5 * k;
+        v.stack_depth_median = 2.0 + k;
         s.pops = static_cast<uint64_t>(3 * k);
         r.add_frame(static_cast<size_t>(k), k / 30.0, 0.002, s, v);
     }
@@ -464,6 +466,7 @@ void report_summary() {
     CHECK(r.to_json()["frames"][1]["coverage_probes"] == 100 && r.to_json()["frames"][1]["buried_probes"] == 1);
     CHECK(std::fabs(sum["max_tip_height_median"].get<double>() - 0.15) < 1e-12 && std::fabs(sum["max_tip_height_p90"].get<double>() - 0.25) < 1e-12);
     CHECK(sum["max_bristle_percent"] == 1.5 && r.to_json()["frames"][0]["tip_height_p90"] == 0.25);
+    CHECK(sum["max_stack_efficiency"] == 1.75 && r.to_json()["frames"][1]["stack_efficiency"] == 1.25 && r.to_json()["frames"][1]["stack_depth_median"] == 3.0);
     CHECK(r.to_json()["frames"][1]["pops"] == 3 && std::fabs(sum["max_pops_percent"].get<double>() - 100.0) < 1e-12);
     CHECK(tidy(0.1f) == 0.1 && tidy(0.6f) == 0.6);
 }

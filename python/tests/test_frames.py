@@ -95,6 +95,7 @@ def test_figures_after_create_and_steps(sphere) -> None:
         check = s.validate()
         assert check.intersecting_pairs == 0 and check.body_penetrations == 0
         assert 0.5 < check.coverage <= 1.0 and check.probes > 0
+        assert check.stack_efficiency > 0 and check.stack_depth_median >= 0
         s.evaluate(wobble(v, 5))
         assert s.frame_stats().frame_index == 1  # evaluate keeps the frame count
 

@@ -42,6 +42,16 @@ pub struct PlumageValidation {
     /// Percentage of placed feathers whose tip stands more than half a
     /// feather length off the skin (bristles).
     pub bristle_percent: f64,
+    /// Median over placed feathers of the tip height divided by the stack
+    /// floor (appended): the thicknesses of the other feathers whose
+    /// triangles cross the segment from the tip to its nearest body point,
+    /// summed (at least the feather's own thickness), over its length. 1
+    /// means the tips lie on the feathers stacked beneath them; larger, that
+    /// they stand higher than the stack forces.
+    pub stack_efficiency: f64,
+    /// Median number of feathers beneath a placed feather's tip (those
+    /// counted in `stack_efficiency`).
+    pub stack_depth_median: f64,
 }
 
 impl From<&ValidationReport> for PlumageValidation {
@@ -58,6 +68,8 @@ impl From<&ValidationReport> for PlumageValidation {
             tip_height_median: r.tip_height_median,
             tip_height_p90: r.tip_height_p90,
             bristle_percent: r.bristle_percent,
+            stack_efficiency: r.stack_efficiency,
+            stack_depth_median: r.stack_depth_median,
         }
     }
 }
@@ -97,12 +109,13 @@ pub(crate) const VALIDATION_V1_SIZE: usize = std::mem::offset_of!(PlumageValidat
 // are fully defined (and comparable with memcmp).
 const _: () = {
     use std::mem::size_of;
-    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 9);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 11);
     assert!(size_of::<PlumagePartStats>() == 4 + 4 + 8 * 5);
 };
 
 /// Runs the exact validation (triangle–triangle intersections, body
-/// penetrations, coverage, mean pitch) on the current feathers. Only reads
+/// penetrations, coverage, mean pitch, tip heights and stacks) on the
+/// current feathers. Only reads
 /// the system. PLUMAGE_STATUS_NOT_AVAILABLE before feathers exist. Reports
 /// PLUMAGE_PHASE_VALIDATING to the system's progress callback, which may stop
 /// it (PLUMAGE_STATUS_INTERRUPTED, no result written).
@@ -132,7 +145,8 @@ pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out:
 /// feather still counts as an obstacle and as a cover: `intersecting_pairs`
 /// counts the pairs with at least one feather rooted on the part (so a
 /// pair across two parts counts in both); `body_penetrations`,
-/// `mean_pitch_deg` and the tip heights are those of the part's feathers;
+/// `mean_pitch_deg`, the tip heights and the stack figures are those of
+/// the part's feathers (any feather may lie beneath their tips);
 /// the coverage probes are drawn on the part's skin (as many per feather as
 /// the whole validation draws). Only reads the system.
 /// PLUMAGE_STATUS_INDEX_OUT_OF_RANGE when the range runs past the mesh's

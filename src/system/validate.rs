@@ -39,8 +39,8 @@ impl System {
     /// [`System::validate`] restricted to the part of the mesh made of the
     /// caller's triangles `triangles` (e.g. one of several meshes dressed as
     /// one system): the pairs with at least one of its feathers (every other
-    /// feather counts as an obstacle), its feathers' body penetrations, pitch
-    /// and tip heights, and coverage probes drawn on its skin (covered by
+    /// feather counts as an obstacle), its feathers' body penetrations, pitch,
+    /// tip heights and tip stacks, and coverage probes drawn on its skin (covered by
     /// any feather), as many per feather as the whole validation draws.
     pub fn validate_part(&self, triangles: std::ops::Range<u32>) -> Option<ValidationReport> {
         self.maybe_test_panic();
@@ -124,5 +124,7 @@ fn validation_report(v: &Validation) -> ValidationReport {
         tip_height_median: v.tip_heights.median,
         tip_height_p90: v.tip_heights.p90,
         bristle_percent: v.tip_heights.bristle_percent,
+        stack_efficiency: v.tip_stacks.efficiency,
+        stack_depth_median: v.tip_stacks.depth_median,
     }
 }

@@ -13,7 +13,10 @@ pub use exact::{body_penetrations, feather_beyond_root};
 // Only the adjustment's tests use the plane directly.
 #[cfg(test)]
 pub(crate) use exact::FlatPlane;
-pub use lie::{BRISTLE_TIP_HEIGHT, TipHeights, summarise_tip_heights, tip_heights};
+pub use lie::{
+    BRISTLE_TIP_HEIGHT, OwnedTriangles, TipHeights, TipLie, TipStacks, summarise_tip_heights, summarise_tip_stacks,
+    tip_heights, tip_lies,
+};
 
 pub use crate::intersect::{triangles_intersect, triangles_intersect_f64};
 
@@ -45,6 +48,9 @@ pub struct Validation {
     pub mean_pitch_deg: f64,
     /// How far the tips stand off the skin (see [`tip_heights`]).
     pub tip_heights: TipHeights,
+    /// How the tips lie on the feathers stacked beneath them (see
+    /// [`tip_lies`]).
+    pub tip_stacks: TipStacks,
 }
 
 /// What a validation looks at: every feather at one pose, the body at that
@@ -76,7 +82,8 @@ pub fn validate(input: &ValidationInput<'_>) -> Validation {
 }
 
 /// As [`validate`], reporting `Phase::Validating` to `progress` between its
-/// stages (the grid, coverage, pairs, penetrations, tip heights); stopped,
+/// stages (the grid, coverage, pairs, penetrations, tip heights and
+/// stacks); stopped,
 /// it returns `Interrupted` (validation changes nothing).
 pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) -> Result<Validation> {
     let ValidationInput { feather_triangles, frames, shapes, poses, body, skin, probes, seed } = *input;
@@ -90,7 +97,7 @@ pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) 
     progress.check(Phase::Validating, 0.7)?;
     let body_penetrations = body_penetrations(frames, shapes, poses, body);
     progress.check(Phase::Validating, 0.9)?;
-    let tip_heights = summarise_tip_heights(&tip_heights(frames, shapes, poses, body));
+    let (tip_heights, tip_stacks) = how_tips_lie(input, OwnedTriangles { grid: &grid, owner: &owner }, |_| true);
     progress.check(Phase::Validating, 1.0)?;
     Ok(Validation {
         intersecting_pairs,
@@ -100,13 +107,15 @@ pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) 
         buried_probes: coverage.buried,
         mean_pitch_deg: mean_pitch_deg(poses),
         tip_heights,
+        tip_stacks,
     })
 }
 
 /// [`validate`] restricted to a part of the coat: the feathers `member`
 /// marks (one flag per feather). Every feather is still an obstacle and a
 /// cover: the pairs are those with at least one member, the penetrations,
-/// pitch and tip heights the members', and the coverage probes are drawn on
+/// pitch, tip heights and tip stacks the members' (any feather may lie
+/// beneath a member's tip), and the coverage probes are drawn on
 /// `input.skin`, which the caller restricts to the part's skin. Indices
 /// stay the whole coat's.
 pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation {
@@ -123,6 +132,7 @@ pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation
     );
     let mut intersecting_pairs = intersecting_pairs_in(&grid, &owner);
     intersecting_pairs.retain(|&(a, b)| is_member(a as usize) || is_member(b as usize));
+    let (tip_heights, tip_stacks) = how_tips_lie(input, OwnedTriangles { grid: &grid, owner: &owner }, is_member);
     Validation {
         intersecting_pairs,
         body_penetrations: body_penetrations(&f, &s, &p, body).into_iter().map(|k| picked[k as usize] as u32).collect(),
@@ -130,8 +140,21 @@ pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation
         probes: coverage.probes,
         buried_probes: coverage.buried,
         mean_pitch_deg: mean_pitch_deg(&p),
-        tip_heights: summarise_tip_heights(&tip_heights(&f, &s, &p, body)),
+        tip_heights,
+        tip_stacks,
     }
+}
+
+/// The tip heights and stacks of the feathers `member` picks, every
+/// feather of `input` counting as one that may lie beneath a tip.
+fn how_tips_lie(
+    input: &ValidationInput<'_>,
+    feathers: OwnedTriangles<'_>,
+    member: impl Fn(usize) -> bool + Sync,
+) -> (TipHeights, TipStacks) {
+    let lies = tip_lies(input.frames, input.shapes, input.poses, input.body, feathers, member);
+    let heights: Vec<f64> = lies.iter().map(|l| l.height).collect();
+    (summarise_tip_heights(&heights), summarise_tip_stacks(&lies))
 }
 
 /// Fraction of the probes of `skin` outside `body` whose normal ray meets

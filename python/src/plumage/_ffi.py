@@ -185,6 +185,8 @@ class Validation(ctypes.Structure):
         ("tip_height_median", ctypes.c_double),
         ("tip_height_p90", ctypes.c_double),
         ("bristle_percent", ctypes.c_double),
+        ("stack_efficiency", ctypes.c_double),
+        ("stack_depth_median", ctypes.c_double),
     ]
 
 

@@ -124,6 +124,8 @@ class Validation:
     tip_height_median: float
     tip_height_p90: float
     bristle_percent: float
+    stack_efficiency: float
+    stack_depth_median: float
 
 
 @dataclass(frozen=True)
