@@ -64,6 +64,12 @@
 #define DOWN_BEND_PER_LIMIT 2.0
 
 /**
+ * Shaft segments of the default feather: four, so that it bends over what
+ * lies beneath it ([`Preset::Kite`] is the rigid one).
+ */
+#define DEFAULT_SHAFT_SEGMENTS 4
+
+/**
  * Most triangles of a posed feather: per vane, every interior joint's
  * station counts in the fans of both its segments, the vane corners in one
  * (see [`ShaftPlan`]).
@@ -208,8 +214,9 @@
 #define PLUMAGE_MODE_REBUILD 2
 
 /**
- * `plumage_config_init_preset`: contour feathers (the defaults of
- * `plumage_config_init`).
+ * `plumage_config_init_preset`: contour feathers that lie down (the
+ * defaults of `plumage_config_init`): bent shafts of 4 segments, each
+ * feather draped over what lies beneath it.
  */
 #define PLUMAGE_PRESET_FEATHERS 0
 
@@ -221,12 +228,17 @@
 #define PLUMAGE_PRESET_SCALES 1
 
 /**
- * `plumage_config_init_preset`: contour feathers that lie down, the
- * defaults of `plumage_config_init` with bent shafts (4 segments): each
- * feather drapes over what lies beneath it, for several times a rigid
- * feather's adjustment cost.
+ * `plumage_config_init_preset`: the same as `PLUMAGE_PRESET_FEATHERS`
+ * (the bent coat's name while the rigid kite was the default).
  */
 #define PLUMAGE_PRESET_SLEEK 2
+
+/**
+ * `plumage_config_init_preset`: the paper's rigid feather, the defaults of
+ * `plumage_config_init` with one shaft segment (a flat kite): cheaper to
+ * adjust, but a coat of kites stands off the body.
+ */
+#define PLUMAGE_PRESET_KITE 3
 
 /**
  * Progress phase: checking and welding the mesh, building the surface.
@@ -407,11 +419,13 @@ typedef struct PlumageConfig {
    */
   uint32_t height_field_v;
   /**
-   * Extra lift added by the fine-pitch step, radians (default 0).
+   * Extra lift added by the fine-pitch step, radians (default 0); a bent
+   * feather's root segment is lifted by it above where it drapes.
    */
   float fluffiness;
   /**
-   * Allowed penetration into obstacles, as a fraction of thickness (default 0).
+   * Allowed penetration into obstacles, as a fraction of thickness
+   * (default 0), in the straight feather's fine-pitch step: the kite's.
    */
   float collision_allowance;
   /**
@@ -1071,9 +1085,10 @@ void plumage_config_init(struct PlumageConfig *cfg);
 
 /**
  * Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
- * `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
- * gives; `PLUMAGE_PRESET_SCALES` fish scales; `PLUMAGE_PRESET_SLEEK`
- * feathers with bent shafts that lie down. An unknown preset is refused
+ * `struct_size`: `PLUMAGE_PRESET_FEATHERS` (and its older name
+ * `PLUMAGE_PRESET_SLEEK`) gives what `plumage_config_init` gives, feathers
+ * with bent shafts that lie down; `PLUMAGE_PRESET_SCALES` fish scales;
+ * `PLUMAGE_PRESET_KITE` rigid feathers. An unknown preset is refused
  * with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
  *
  * # Safety

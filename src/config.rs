@@ -29,6 +29,10 @@ pub enum Mode {
     Rebuild,
 }
 
+/// Shaft segments of the default feather: four, so that it bends over what
+/// lies beneath it ([`Preset::Kite`] is the rigid one).
+pub const DEFAULT_SHAFT_SEGMENTS: u32 = 4;
+
 /// All parameters of a system. `Config::default()` gives the documented defaults.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
@@ -68,9 +72,12 @@ pub struct Config {
     pub height_field_u: usize,
     /// Height-field cells across the vanes.
     pub height_field_v: usize,
-    /// Extra lift added in the fine-pitch step, radians (≥ 0).
+    /// Extra lift added in the fine-pitch step, radians (≥ 0); a bent
+    /// feather's root segment is lifted by it above where it drapes.
     pub fluffiness: f32,
-    /// Allowed penetration into obstacles, as a fraction of feather thickness (≥ 0).
+    /// Allowed penetration into obstacles, as a fraction of feather
+    /// thickness (≥ 0), in the straight feather's fine-pitch step (the
+    /// kite's); a bent feather's drape keeps its clearance.
     pub collision_allowance: f32,
     /// Propagation threshold θs (radians): a readjusted feather whose pitch
     /// or roll moved more than this makes the feathers lying on it readjust
@@ -160,19 +167,23 @@ pub struct Config {
 /// each ([`Config::preset`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Preset {
-    /// Contour feathers: long (4 rows), narrow, lying over three to four
-    /// rows of their neighbours.
+    /// Contour feathers that lie down (the defaults): long (4 rows),
+    /// narrow, lying over three to four rows of their neighbours, with bent
+    /// shafts (four segments), so that each feather drapes over what lies
+    /// beneath it.
     Feathers,
     /// Fish scales: short and wide (2 spacings each), nearly rigid (two
     /// segments, a small bend), in staggered rows, each overlapping the
     /// next row by half.
     Scales,
-    /// Contour feathers that lie down: the defaults of [`Preset::Feathers`]
-    /// with bent shafts (four segments), so each feather drapes over what
-    /// lies beneath it (at rest, on the shared models, tip heights about
-    /// half the kite's and bristles a tenth). A bent feather costs several
-    /// times a kite to adjust (README, "Bent feathers").
+    /// The same as [`Preset::Feathers`] (the name the bent coat had while
+    /// the rigid kite was the default).
     Sleek,
+    /// The paper's feather: the defaults of [`Preset::Feathers`] with a
+    /// rigid shaft (one segment, the flat kite). Cheaper to adjust than a
+    /// bent feather, but a coat of them stands off the body (README, "The
+    /// kite").
+    Kite,
 }
 
 impl Default for Config {
@@ -203,7 +214,7 @@ impl Default for Config {
             flow_source: None,
             recompute_neighbourhoods: true,
             curvature_min_scale: 0.4,
-            shaft_segments: 1,
+            shaft_segments: DEFAULT_SHAFT_SEGMENTS,
             bend_limit: crate::adjustment::DEFAULT_BEND_LIMIT,
             length_per_spacing: crate::feather::LENGTH_PER_SPACING,
             width_per_spacing: crate::feather::WIDTH_PER_SPACING,
@@ -236,8 +247,8 @@ impl Config {
     /// [`Preset::Feathers`]).
     pub fn preset(preset: Preset) -> Self {
         match preset {
-            Preset::Feathers => Self::default(),
-            Preset::Sleek => Self { shaft_segments: 4, ..Self::default() },
+            Preset::Feathers | Preset::Sleek => Self::default(),
+            Preset::Kite => Self { shaft_segments: 1, ..Self::default() },
             Preset::Scales => Self {
                 length_per_spacing: 2.0,
                 width_per_spacing: 2.0,

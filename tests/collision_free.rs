@@ -20,7 +20,7 @@ use common::gltf_mesh::load_model;
 use common::shapes::Shape;
 use glam::Vec3;
 use plumage::stats::ValidationReport;
-use plumage::{Config, MeshInput, System};
+use plumage::{Config, MeshInput, Preset, System};
 
 fn dress(shape: &Shape, hints: Option<&[f32]>, config: &Config) -> (System, ValidationReport) {
     let mut mesh = MeshInput::new(&shape.positions, &shape.indices);
@@ -102,7 +102,9 @@ fn torus_with_a_cyclic_flow_is_collision_free() {
     let (shape, hints) = torus(10.0, 3.0, 120, 40);
     let config = Config { target_feathers: 4000, threads: 2, ..Config::default() };
     let (system, v) = dress(&shape, Some(&hints), &config);
-    assert_collision_free("torus", &system, &v, 0.985);
+    // Bent feathers lying along the tube cover a little less of it than
+    // kites standing off it did (0.984 against above 0.985).
+    assert_collision_free("torus", &system, &v, 0.98);
 }
 
 /// The three shared models at the sizes of the issue, each with its flow
@@ -146,20 +148,27 @@ fn bare_skin_is_left_out_of_coverage() {
     assert!(v.probes > 0 && v.buried_probes == 0, "{v:?}");
 }
 
-/// Fluffiness lifts every feather, so the mean pitch rises with it; a
-/// collision allowance lets feathers sink into their obstacles, so it falls.
+/// Fluffiness lifts every feather, so the mean pitch rises with it (the
+/// default bent feather and the kite); a collision allowance lets kites
+/// sink into their obstacles, so it falls (it acts in the kite's fine-pitch
+/// step; a bent feather's drape keeps its clearance).
 #[test]
 fn fluffiness_raises_mean_pitch_and_a_collision_allowance_lowers_it() {
     let shape = sphere(30, 60, 10.0);
-    let pitch = |fluffiness: f32, collision_allowance: f32| {
-        let config = Config { target_feathers: 800, threads: 2, fluffiness, collision_allowance, ..Config::default() };
-        dress(&shape, None, &config).1.mean_pitch_deg
-    };
-    let base = pitch(0.0, 0.0);
-    let fluffed: Vec<f64> = [0.05, 0.1, 0.2].iter().map(|&f| pitch(f, 0.0)).collect();
-    eprintln!("mean pitch: base {base:.2}, fluffiness 0.05/0.1/0.2 {fluffed:.2?}");
-    assert!(base < fluffed[0] && fluffed[0] < fluffed[1] && fluffed[1] < fluffed[2], "{base} {fluffed:?}");
-    let sunk = pitch(0.0, 0.5);
-    eprintln!("collision allowance 0.5: {sunk:.2}");
-    assert!(sunk < base, "{sunk} vs {base}");
+    for preset in [Preset::Feathers, Preset::Kite] {
+        let pitch = |fluffiness: f32, collision_allowance: f32| {
+            let base = Config::preset(preset);
+            let config = Config { target_feathers: 800, threads: 2, fluffiness, collision_allowance, ..base };
+            dress(&shape, None, &config).1.mean_pitch_deg
+        };
+        let base = pitch(0.0, 0.0);
+        let fluffed: Vec<f64> = [0.05, 0.1, 0.2].iter().map(|&f| pitch(f, 0.0)).collect();
+        eprintln!("{preset:?}: mean pitch: base {base:.2}, fluffiness 0.05/0.1/0.2 {fluffed:.2?}");
+        assert!(base < fluffed[0] && fluffed[0] < fluffed[1] && fluffed[1] < fluffed[2], "{base} {fluffed:?}");
+        if preset == Preset::Kite {
+            let sunk = pitch(0.0, 0.5);
+            eprintln!("collision allowance 0.5: {sunk:.2}");
+            assert!(sunk < base, "{sunk} vs {base}");
+        }
+    }
 }

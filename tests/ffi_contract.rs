@@ -444,14 +444,19 @@ fn feather_geometry_copy_out() {
         first += vc;
         tri += triangle_counts[f] as usize;
     }
-    // The triangles are the 18-float ones, corner for corner.
+    // The triangles are the ones `plumage_system_feather_triangles` copies
+    // out (9 floats each), corner for corner.
     let mut len = 0usize;
-    let mut flat = vec![0f32; 18 * count];
+    assert_eq!(
+        unsafe { plumage_system_feather_triangles(sys, null_mut(), 0, &mut len) },
+        PLUMAGE_STATUS_BUFFER_TOO_SMALL
+    );
+    let mut flat = vec![0f32; len];
     assert_eq!(
         unsafe { plumage_system_feather_triangles(sys, flat.as_mut_ptr(), flat.len(), &mut len) },
         PLUMAGE_STATUS_OK
     );
-    assert_eq!(nt, 2 * count);
+    assert_eq!(9 * nt, len);
     for t in 0..nt {
         for c in 0..3 {
             let v = indices[3 * t + c] as usize;

@@ -144,8 +144,8 @@ class PlumageSettings(bpy.types.PropertyGroup):
     preset: EnumProperty(
         name="Preset",
         items=[
-            ("FEATHERS", "Feathers", "Contour feathers, long and narrow, rigid (fastest)"),
-            ("SLEEK", "Sleek", "Contour feathers with bent shafts that lie down over what is beneath them (slower)"),
+            ("FEATHERS", "Feathers", "Contour feathers with bent shafts that lie down over what is beneath them"),
+            ("KITE", "Kite", "The paper's rigid feather: cheaper, but the coat stands off the body"),
             ("SCALES", "Scales", "Fish scales, short, wide and nearly rigid"),
         ],
     )

@@ -64,9 +64,11 @@ int main() try {
 
     const std::vector<PlumageFeather> feathers = sys.feathers();
     expect(feathers.size() == n, "one PlumageFeather per feather");
-    expect(sys.feather_triangles().size() == 18 * n, "18 floats per feather");
+    const size_t floats = sys.feather_triangles().size();
+    expect(floats % 9 == 0 && floats >= 18 * n, "nine floats a triangle, at least two triangles a feather");
     const plumage::FeatherGeometry g = sys.feather_geometry();
     expect(g.feather_count() == n, "geometry: one entry per feather");
+    expect(floats == 3 * g.indices.size(), "the geometry's triangles are the copied-out ones");
     expect(g.positions.size() == 3 * g.vertex_count() && g.uvs.size() == 2 * g.vertex_count(), "geometry sizes");
     bool unit = true;
     for (size_t i = 0; i < g.vertex_count(); ++i) {

@@ -154,11 +154,11 @@ std::string usage_text() {
            "                       (default 2; 0 = at once); lifting clear of a collision is never delayed\n"
            "  --curvature-min-scale S   smallest spacing factor where the surface bends tighter than a feather\n"
            "                       (default 0.4; 1 = uniform spacing)\n"
-           "  --fluffiness DEG     extra pitch added to every feather in the fine-pitch step (default 0)\n"
-           "  --preset feathers|sleek|scales   the library's defaults: contour feathers (default; rigid kites),\n"
-           "                       sleek (contour feathers with bent shafts that lie down; several times slower)\n"
-           "                       or fish scales (short, wide, nearly rigid, staggered rows); later options override them\n"
-           "  --shaft-segments S   shaft segments of a feather, 1 to 4 (default 1 = rigid kite): more lets it drape\n"
+           "  --fluffiness DEG     extra pitch added to every feather (a bent one's root segment) (default 0)\n"
+           "  --preset feathers|kite|scales   the library's defaults: contour feathers that lie down (default; bent\n"
+           "                       shafts; `sleek` is the same), kite (the paper's rigid feather: cheaper, stands off the\n"
+           "                       body) or fish scales (short, wide, nearly rigid, staggered rows); later options override them\n"
+           "  --shaft-segments S   shaft segments of a feather, 1 to 4 (default 4; 1 = the rigid kite): more lets it drape\n"
            "  --bend-limit DEG     largest bend at each shaft joint (default 22.9)\n"
            "  --spacing-map NAME[:C]   per-vertex spacing multiplier from vertex attribute NAME (component C of a\n"
            "                       vector, default 0; e.g. _FEATHER_DENSITY or COLOR_0:0): 2 = half as dense, 0 = bare skin\n"
@@ -226,7 +226,7 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--settle-rate") o.settle_rate_deg = parse_float(arg, value);
         else if (arg == "--curvature-min-scale") o.curvature_min_scale = parse_float(arg, value);
         else if (arg == "--fluffiness") o.fluffiness_deg = parse_float(arg, value);
-        else if (arg == "--preset") o.preset = parse_choice(arg, value, {"feathers", "sleek", "scales"}, {PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SLEEK, PLUMAGE_PRESET_SCALES});
+        else if (arg == "--preset") o.preset = parse_choice(arg, value, {"feathers", "sleek", "kite", "scales"}, {PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SLEEK, PLUMAGE_PRESET_KITE, PLUMAGE_PRESET_SCALES});
         else if (arg == "--shaft-segments") o.shaft_segments = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--bend-limit") o.bend_limit_deg = parse_float(arg, value);
         else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));

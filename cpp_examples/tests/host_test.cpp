@@ -397,8 +397,9 @@ float feathers_min_x(const std::string& file) {
 }
 
 // The mean shaft direction (tip - root, normalized) of the feathers in a
-// .glb the host wrote (mesh 1, rest pose). The runs here use the default
-// one-segment feather: a kite of 4 vertices, root and tip first.
+// .glb the host wrote (mesh 1, rest pose). The runs here use the
+// one-segment feather (`--preset kite`): a kite of 4 vertices, root and tip
+// first; the flow does not depend on the shaft.
 std::array<double, 3> mean_shaft(const std::string& file, size_t feathers) {
     tinygltf::TinyGLTF loader;
     tinygltf::Model m;
@@ -433,7 +434,7 @@ int flow_map() {
     const double h = std::sqrt(0.5);
     f.doc()["nodes"][0]["rotation"] = {0.0, h, 0.0, h};
     f.write(path("turned.glb"), GltfFormat::Glb);
-    const std::vector<std::string> common = {path("turned.glb"), "--frames", "0", "--feathers", "120", "--flow", "0,0,1"};
+    const std::vector<std::string> common = {path("turned.glb"), "--frames", "0", "--feathers", "120", "--flow", "0,0,1", "--preset", "kite"};
     std::vector<std::string> args = common;
     const json plain = dress("turned_plain", args, 0);
     const std::array<double, 3> along_axis = mean_shaft(path("turned_plain.glb"), plain.value("feathers", size_t{0}));
@@ -453,12 +454,12 @@ int flow_map() {
 // glTF file, -X for the built-in body) towards its back.
 int default_flow() {
     sheet().write(path("front.glb"), GltfFormat::Glb);
-    const json sheet_run = dress("front_sheet", {path("front.glb"), "--frames", "0", "--feathers", "120"}, 0);
+    const json sheet_run = dress("front_sheet", {path("front.glb"), "--frames", "0", "--feathers", "120", "--preset", "kite"}, 0);
     CHECK_MSG(sheet_run["config"].contains("flow_source"), sheet_run["config"].dump());
     CHECK(sheet_run["config"]["flow_source"] == json::array({0.0, 0.0, 1.0}));
     const std::array<double, 3> sheet_shaft = mean_shaft(path("front_sheet.glb"), sheet_run.value("feathers", size_t{0}));
     CHECK_MSG(sheet_shaft[2] < -0.3, std::to_string(sheet_shaft[0]) + "," + std::to_string(sheet_shaft[2]));
-    const json body = dress("front_builtin", {"--frames", "0", "--feathers", "300"}, 0);
+    const json body = dress("front_builtin", {"--frames", "0", "--feathers", "300", "--preset", "kite"}, 0);
     CHECK_MSG(body["config"]["flow_source"][0] == 0.0, body["config"].dump());
     const std::array<double, 3> body_shaft = mean_shaft(path("front_builtin.glb"), body.value("feathers", size_t{0}));
     CHECK_MSG(body_shaft[0] > 0.5, std::to_string(body_shaft[0]));
@@ -468,22 +469,46 @@ int default_flow() {
 }
 
 // --preset scales: the library's scale defaults reach the report, and the
-// scales are about half as long as the feathers of the same spacing;
-// --preset sleek bends the feathers' shafts.
+// scales are about half as long as the feathers of the same spacing; the
+// default feathers have bent shafts, --preset kite rigid ones.
 int preset_scales() {
     const json feathers = dress("preset_feathers", {"--frames", "0", "--feathers", "300"}, 0);
     const json scales = dress("preset_scales", {"--frames", "0", "--feathers", "300", "--preset", "scales"}, 0);
     CHECK(scales["config"]["shaft_segments"] == 2 && scales["config"]["length_per_spacing"] == 2.0);
-    CHECK(feathers["config"]["shaft_segments"] == 1 && feathers["config"]["length_per_spacing"] == 4.0);
+    CHECK(feathers["config"]["shaft_segments"] == 4 && feathers["config"]["length_per_spacing"] == 4.0);
     CHECK(scales["static"]["intersecting_pairs"] == 0 && scales["static"]["body_penetrations"] == 0);
     const json over = dress("preset_override", {"--frames", "0", "--feathers", "300", "--preset", "scales", "--shaft-segments", "3"}, 0);
     CHECK(over["config"]["shaft_segments"] == 3);
-    // --preset sleek: the feathers' defaults with bent shafts; they lie
-    // lower than the kites of the same model and seed.
+    // --preset kite: the feathers' defaults with rigid shafts; the default
+    // bent feathers lie lower than the kites of the same model and seed.
+    const json kite = dress("preset_kite", {"--frames", "0", "--feathers", "300", "--preset", "kite"}, 0);
+    CHECK(kite["config"]["shaft_segments"] == 1 && kite["config"]["length_per_spacing"] == 4.0);
+    CHECK(kite["static"]["intersecting_pairs"] == 0 && kite["static"]["body_penetrations"] == 0);
+    CHECK(feathers["static"]["intersecting_pairs"] == 0 && feathers["static"]["body_penetrations"] == 0);
+    CHECK(feathers["static"]["tip_height_median"].get<double>() < kite["static"]["tip_height_median"].get<double>());
+    // --preset sleek is the default's older name.
     const json sleek = dress("preset_sleek", {"--frames", "0", "--feathers", "300", "--preset", "sleek"}, 0);
-    CHECK(sleek["config"]["shaft_segments"] == 4 && sleek["config"]["length_per_spacing"] == 4.0);
-    CHECK(sleek["static"]["intersecting_pairs"] == 0 && sleek["static"]["body_penetrations"] == 0);
-    CHECK(sleek["static"]["tip_height_median"].get<double>() < feathers["static"]["tip_height_median"].get<double>());
+    CHECK(sleek["static"]["tip_height_median"] == feathers["static"]["tip_height_median"]);
+    return 0;
+}
+
+// The defaults lie down (issue #30): the built-in model dressed at
+// plumage_config_init's defaults (the host's) has its tips at about a fifth
+// of a length, few bristles and closed coverage, collision-free, and its
+// tips lie lower than the kite's, measured by the library's validation.
+int default_coat_lies_down() {
+    const json coat = dress("default_coat", {"--frames", "0", "--feathers", "2000"}, 0);
+    const json kite = dress("default_coat_kite", {"--frames", "0", "--feathers", "2000", "--preset", "kite"}, 0);
+    const json& s = coat["static"];
+    std::printf("default coat: tip median %.3f, p90 %.3f, bristles %.2f %%, coverage %.3f, stack efficiency %.2f\n",
+                s["tip_height_median"].get<double>(), s["tip_height_p90"].get<double>(), s["bristle_percent"].get<double>(),
+                s["coverage"].get<double>(), s["stack_efficiency"].get<double>());
+    CHECK(coat["config"]["shaft_segments"] == 4);
+    CHECK(s["intersecting_pairs"] == 0 && s["body_penetrations"] == 0);
+    CHECK(s["tip_height_median"].get<double>() <= 0.22 && s["tip_height_p90"].get<double>() <= 0.33);
+    CHECK(s["bristle_percent"].get<double>() <= 2.0 && s["coverage"].get<double>() >= 0.98);
+    CHECK(s["tip_height_median"].get<double>() <= 0.6 * kite["static"]["tip_height_median"].get<double>());
+    CHECK(s["stack_efficiency"].get<double>() < kite["static"]["stack_efficiency"].get<double>());
     return 0;
 }
 
@@ -561,7 +586,7 @@ int bad_options() {
         {{"--feathers", "10", "--spacing", "0.5"}, "alternatives"},
         {{"--fps", "0"}, "--fps"},
         {{"--flow", "1,2"}, "X,Y,Z"},
-        {{"--preset", "fur"}, "feathers|sleek|scales"},
+        {{"--preset", "fur"}, "feathers|sleek|kite|scales"},
         {{"--theta", "nan"}, "--theta"},
         {{"a.glb", "b.glb"}, "more than one input"},
         {{"--out"}, "missing value"},
@@ -642,6 +667,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"flow_map", flow_map},
     {"default_flow", default_flow},
     {"preset_scales", preset_scales},
+    {"default_coat_lies_down", default_coat_lies_down},
     {"truncated", truncated},
     {"not_gltf", not_gltf},
     {"missing", missing},

@@ -128,7 +128,8 @@ void test_buffers_and_sizes() {
     CHECK(st == (n <= 1 ? PLUMAGE_STATUS_OK : PLUMAGE_STATUS_BUFFER_TOO_SMALL));
     float xyz[1];
     st = plumage_system_feather_triangles(sys.get(), xyz, 1, &len);
-    CHECK(len == 18 * n);
+    // Nine floats a triangle, at least two triangles (a kite) a feather.
+    CHECK(len % 9 == 0 && len >= 18 * n);
     CHECK(st == (n == 0 ? PLUMAGE_STATUS_OK : PLUMAGE_STATUS_BUFFER_TOO_SMALL));
     CHECK(plumage_system_feather_triangles(sys.get(), xyz, 1, nullptr) == PLUMAGE_STATUS_NULL_POINTER);
     if (n > 0) CHECK(!last_error(sys.get()).empty());

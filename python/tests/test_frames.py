@@ -49,7 +49,7 @@ def test_feather_geometry_matches_the_feathers_and_their_triangles(sphere) -> No
     with run(sphere, 1, frames=1) as s:
         geo = s.feather_geometry()
         feathers = s.feathers()
-        kites = s.feather_triangles()
+        posed = s.feather_triangles()
         f = s.feather_count
         nv, nt = len(geo.positions), len(geo.triangles)
         assert geo.positions.dtype == np.float32 and geo.triangles.dtype == np.uint32
@@ -62,9 +62,9 @@ def test_feather_geometry_matches_the_feathers_and_their_triangles(sphere) -> No
         # each triangle stays within its feather's vertices
         assert np.array_equal(geo.feather_index[geo.triangles[:, 0]], np.repeat(np.arange(f), geo.triangle_counts))
         assert (geo.feather_index[geo.triangles] == geo.feather_index[geo.triangles[:, :1]]).all()
-        # two triangles per feather today: they are plumage_system_feather_triangles, bit for bit
-        if nt == 2 * f:
-            assert geo.positions[geo.triangles].reshape(f, 6, 3).tobytes() == kites.tobytes()
+        # the mesh's triangles are plumage_system_feather_triangles, bit for bit
+        assert nt * 3 == posed.shape[0] * posed.shape[1]
+        assert geo.positions[geo.triangles].reshape(posed.shape).tobytes() == posed.tobytes()
         assert ((geo.uvs >= 0) & (geo.uvs <= 1)).all()
         first = np.concatenate([[0], np.cumsum(geo.vertex_counts)[:-1]]).astype(np.intp)
         # the first vertex of a placed feather is its root (u 0, on the shaft)
@@ -138,9 +138,14 @@ def test_scales_preset_and_bent_feathers(sphere) -> None:
         # A four-segment shaft: more than the kite's four vertices a feather, triangles to match.
         assert g.positions.shape[0] > 4 * bent.feather_count
         assert bent.feather_triangles().shape == (bent.feather_count, 3 * (g.triangles.shape[0] // bent.feather_count), 3)
-    # The sleek preset is the feathers' defaults with four shaft segments.
+        # The default feathers have four shaft segments (the sleek preset is
+        # their older name); the kite preset is the rigid one.
+        assert feathers.feather_geometry().positions.shape == g.positions.shape
     with plumage.System(v, t, target_feathers=300, threads=1, preset="sleek") as sleek:
         assert sleek.feather_geometry().positions.shape == g.positions.shape
+    with plumage.System(v, t, target_feathers=300, threads=1, preset="kite") as kite:
+        assert kite.feather_geometry().positions.shape[0] == 4 * kite.feather_count
+        assert kite.feather_triangles().shape == (kite.feather_count, 6, 3)
     with pytest.raises(plumage.PlumageError) as e:
         plumage.System(v, t, preset="fur")
     assert e.value.status_name == "INVALID_ARGUMENT"

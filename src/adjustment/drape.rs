@@ -35,7 +35,8 @@ pub(super) fn drape(
     params: &AdjustParams,
     scratch: &mut HeightField,
 ) -> (FeatherPose, bool) {
-    fill_swept_triangles(scratch, obstacles, straight.roll);
+    let gap = params.clearance * at.shape.thickness;
+    fill_swept_triangles(scratch, obstacles, straight.roll, gap, params.body_clearance_angle.max(0.0).tan());
     let sized = at.shape.scaled(straight.scale);
     if let Some(pose) = swept_drape(scratch, &sized, straight, params)
         && exact_check(at, pose, scratch, true, &mut CheckHints::default())
@@ -268,11 +269,21 @@ fn descend(high: f32, low: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f3
             return Some(above);
         }
         if !clear(below) {
-            return Some(narrow(below, above, DRAPE_BISECTIONS, clear));
+            let fits = narrow(below, above, DRAPE_BISECTIONS, &mut clear);
+            // A segment left at its very contact (as one lying in the plane
+            // of a sheet at its edge can be) flips between clear and not
+            // under a rounding error; a little above it, where clear, it
+            // stays clear under a rigid motion.
+            let kept = (fits + DESCENT_MARGIN).min(above);
+            return Some(if kept > fits && clear(kept) { kept } else { fits });
         }
         above = below;
     }
 }
+
+/// Radians a descended segment is lifted above its contact where that is
+/// clear (a quarter of the step the bisections leave).
+const DESCENT_MARGIN: f32 = 0.25 * DRAPE_STEP / (1 << DRAPE_BISECTIONS) as f32;
 
 /// The exact check of segment `segment` (from the root) of a posed
 /// feather: its triangles meet no obstacle and no obstacle's raised top,

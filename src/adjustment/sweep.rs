@@ -78,17 +78,27 @@ struct CutPrism {
 
 /// The triangles the field rasterised (the near obstacles, each with its
 /// raised top, and the skin near the root; already in the root frame) in
-/// the roll frame of `roll`: `field.swept`.
-pub(super) fn fill_swept_triangles(field: &mut HeightField, obstacles: &[ObstacleFeather], roll: f32) {
+/// the roll frame of `roll`: `field.swept`. The drape keeps a clearance
+/// from them, so that a motion by a rounding error cannot make it touch:
+/// obstacles are lifted by `gap`, the skin by `skin_slope` times the
+/// distance along the root's tangent (the kite's clearance angle).
+pub(super) fn fill_swept_triangles(
+    field: &mut HeightField,
+    obstacles: &[ObstacleFeather],
+    roll: f32,
+    gap: f32,
+    skin_slope: f32,
+) {
     let mut swept = std::mem::take(&mut field.swept);
     swept.clear();
     let (sb, cb) = roll.sin_cos();
-    let unroll = |p: Vec3| Vec3::new(p.x, p.y * cb + p.z * sb, p.z * cb - p.y * sb);
+    let unroll = |p: Vec3, lift: f32| Vec3::new(p.x, p.y * cb + p.z * sb, p.z * cb - p.y * sb + lift);
     let near = obstacles.iter().filter(|o| !o.far_side);
     for (local, o) in field.local_obstacles.iter().zip(near) {
-        push_swept(&mut swept, local, o.thickness, false, unroll);
+        push_swept(&mut swept, local, o.thickness, false, |p| unroll(p, gap));
     }
-    push_swept(&mut swept, &field.local_body, 0.0, true, unroll);
+    // A shear (linear, so a triangle stays one), lifting the skin ahead.
+    push_swept(&mut swept, &field.local_body, 0.0, true, |p| unroll(p, p.x * skin_slope));
     field.swept = swept;
 }
 
@@ -440,6 +450,9 @@ pub(super) fn swept_drape(
         for k in from..=to {
             let (lo, hi) = bounds(angles, k);
             match lowest_clear_angle(field, &segment(angles, k), lo, hi) {
+                // Fluffiness lifts the root segment off what it lies on (it
+                // is clear from its lowest angle up).
+                Some(a) if k == 0 => angles[k] = (a + params.fluffiness.max(0.0)).min(hi),
                 Some(a) => angles[k] = a,
                 None => return Some(k),
             }

@@ -72,9 +72,11 @@ pub struct PlumageConfig {
     pub height_field_u: u32,
     /// Height-field cells across the vanes (default 16).
     pub height_field_v: u32,
-    /// Extra lift added by the fine-pitch step, radians (default 0).
+    /// Extra lift added by the fine-pitch step, radians (default 0); a bent
+    /// feather's root segment is lifted by it above where it drapes.
     pub fluffiness: f32,
-    /// Allowed penetration into obstacles, as a fraction of thickness (default 0).
+    /// Allowed penetration into obstacles, as a fraction of thickness
+    /// (default 0), in the straight feather's fine-pitch step: the kite's.
     pub collision_allowance: f32,
     /// Propagation threshold θs, radians (default 0.05); a feather is also
     /// readjusted once what surrounds it moved, relative to it, by θs times
@@ -176,8 +178,9 @@ pub type PlumageTaskFn = Option<unsafe extern "C" fn(task_context: *mut c_void, 
 pub type PlumageParallelForFn =
     Option<unsafe extern "C" fn(host_context: *mut c_void, count: u32, task: PlumageTaskFn, task_context: *mut c_void)>;
 
-/// `plumage_config_init_preset`: contour feathers (the defaults of
-/// `plumage_config_init`).
+/// `plumage_config_init_preset`: contour feathers that lie down (the
+/// defaults of `plumage_config_init`): bent shafts of 4 segments, each
+/// feather draped over what lies beneath it.
 pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
 
 /// `plumage_config_init_preset`: fish scales, short and wide (2 spacings
@@ -185,11 +188,14 @@ pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
 /// each overlapping the next by half.
 pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 
-/// `plumage_config_init_preset`: contour feathers that lie down, the
-/// defaults of `plumage_config_init` with bent shafts (4 segments): each
-/// feather drapes over what lies beneath it, for several times a rigid
-/// feather's adjustment cost.
+/// `plumage_config_init_preset`: the same as `PLUMAGE_PRESET_FEATHERS`
+/// (the bent coat's name while the rigid kite was the default).
 pub const PLUMAGE_PRESET_SLEEK: u32 = 2;
+
+/// `plumage_config_init_preset`: the paper's rigid feather, the defaults of
+/// `plumage_config_init` with one shaft segment (a flat kite): cheaper to
+/// adjust, but a coat of kites stands off the body.
+pub const PLUMAGE_PRESET_KITE: u32 = 3;
 
 /// Progress callback: `phase` is a `PLUMAGE_PHASE_*` value, `fraction` the
 /// completed share of it in [0, 1]. Return 0 to continue; any other value

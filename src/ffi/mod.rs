@@ -105,9 +105,10 @@ pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
 }
 
 /// Fills `cfg` with the defaults of a preset (`PLUMAGE_PRESET_*`) and sets
-/// `struct_size`: `PLUMAGE_PRESET_FEATHERS` gives what `plumage_config_init`
-/// gives; `PLUMAGE_PRESET_SCALES` fish scales; `PLUMAGE_PRESET_SLEEK`
-/// feathers with bent shafts that lie down. An unknown preset is refused
+/// `struct_size`: `PLUMAGE_PRESET_FEATHERS` (and its older name
+/// `PLUMAGE_PRESET_SLEEK`) gives what `plumage_config_init` gives, feathers
+/// with bent shafts that lie down; `PLUMAGE_PRESET_SCALES` fish scales;
+/// `PLUMAGE_PRESET_KITE` rigid feathers. An unknown preset is refused
 /// with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `cfg` as it was.
 ///
 /// # Safety
@@ -122,6 +123,7 @@ pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, pre
             PLUMAGE_PRESET_FEATHERS => crate::Preset::Feathers,
             PLUMAGE_PRESET_SCALES => crate::Preset::Scales,
             PLUMAGE_PRESET_SLEEK => crate::Preset::Sleek,
+            PLUMAGE_PRESET_KITE => crate::Preset::Kite,
             p => {
                 return Err(Failure::new(
                     PLUMAGE_STATUS_INVALID_ARGUMENT,

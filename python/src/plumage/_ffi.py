@@ -23,7 +23,7 @@ STATUS_INDEX_OUT_OF_RANGE = 11
 STATUS_NOT_AVAILABLE = 16
 
 SAMPLERS = {"guided": 0, "random": 1}
-PRESETS = {"feathers": 0, "scales": 1, "sleek": 2}
+PRESETS = {"feathers": 0, "scales": 1, "sleek": 2, "kite": 3}
 MODES = {"incremental": 0, "legacy": 1, "rebuild": 2}
 PHASES = {0: "preparing", 1: "sampling", 2: "ordering", 3: "adjusting", 4: "validating"}
 

@@ -274,8 +274,10 @@ class System:
     multipliers. Keyword configuration: any `PlumageConfig` field
     (`target_feathers=`, `seed=`, `threads=`, `mode="incremental"|"legacy"|"rebuild"`,
     `sampler="guided"|"random"`, `flow_axis=(x, y, z)`, `flow_source=(x, y, z)`, ...),
-    see `default_config()`; `preset="scales"` starts from the library's fish-scale
-    defaults instead of the feathers' (the keywords then override them). `progress(phase, fraction)` is called while the
+    see `default_config()`. The default feathers have bent shafts that lie down over
+    what is beneath them; `preset="kite"` starts from the paper's rigid feather and
+    `preset="scales"` from the library's fish-scale defaults (the keywords then
+    override them). `progress(phase, fraction)` is called while the
     library works; a truthy return stops the call (PlumageError INTERRUPTED).
     """
 
