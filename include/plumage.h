@@ -44,54 +44,6 @@
 #include <stdint.h>
 
 /**
- * Default largest bend at a joint of a segmented shaft away from the skin
- * (radians, about 23°); see [`DOWN_BEND_PER_LIMIT`] for bends toward it.
- */
-#define DEFAULT_BEND_LIMIT 0.4
-
-/**
- * A joint may bend toward the skin this many times `bend_limit` (46° at
- * the default): a feather curls down over a rounded body or a wing's rim
- * more readily than it rises over what lies beneath it (a real shaft is
- * curved toward the skin). Three joints then curl a feather by up to
- * about 140° down. Measured at rest (2000 feathers, S = 4, host
- * defaults), against a symmetric limit: tip median Flamingo 0.227 ->
- * 0.200, Fox 0.248 -> 0.218, bird 0.246 -> 0.230, built-in 0.212 ->
- * 0.189; bristles 4.7 -> 3.5, 7.6 -> 4.2, 13.6 -> 11.5, 1.6 -> 1.0 %;
- * coverage within 0.002. Three times went further (bristles 1.9, 3.4,
- * 9.0, 0.7 %) with sharper kinks at the joints.
- */
-#define DOWN_BEND_PER_LIMIT 2.0
-
-/**
- * Shaft segments of the default feather: four, so that it bends over what
- * lies beneath it ([`Preset::Kite`] is the rigid one).
- */
-#define DEFAULT_SHAFT_SEGMENTS 4
-
-/**
- * Most triangles of a posed feather: per vane, every interior joint's
- * station counts in the fans of both its segments, the vane corners in one
- * (see [`ShaftPlan`]).
- */
-#define MAX_TRIANGLES (2 * ((2 * MAX_SEGMENTS) - 1))
-
-/**
- * Most shaft segments a feather may have.
- */
-#define MAX_SEGMENTS 4
-
-/**
- * Most joints between shaft segments.
- */
-#define MAX_JOINTS (MAX_SEGMENTS - 1)
-
-/**
- * Most vane-edge stations: the interior joints and the vane corners.
- */
-#define MAX_STATIONS MAX_SEGMENTS
-
-/**
  * The ABI version of this header; bumped only by incompatible changes.
  */
 #define PLUMAGE_ABI_VERSION 1
@@ -280,9 +232,21 @@
 #define PLUMAGE_MAX_COORDINATE 1e9
 
 /**
- * A tip farther than this off the skin, in feather lengths, is a bristle.
+ * Most shaft segments a feather may have (`PlumageConfig.shaft_segments`
+ * is 1 to this).
  */
-#define BRISTLE_TIP_HEIGHT 0.5
+#define PLUMAGE_MAX_SHAFT_SEGMENTS 4
+
+/**
+ * Most triangles of one feather as `plumage_system_feather_triangles`
+ * copies them out (nine floats each): for sizing a buffer per feather.
+ */
+#define PLUMAGE_MAX_FEATHER_TRIANGLES 14
+
+/**
+ * Bend limit of the defaults, radians (`PlumageConfig.bend_limit`).
+ */
+#define PLUMAGE_DEFAULT_BEND_LIMIT 0.4
 
 /**
  * An opaque feathering system. Create with `plumage_system_create`, free

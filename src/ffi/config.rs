@@ -233,6 +233,21 @@ pub const PLUMAGE_MAX_FEATHERS: u32 = 2_000_000;
 /// PLUMAGE_STATUS_LIMIT_EXCEEDED.
 pub const PLUMAGE_MAX_COORDINATE: f32 = 1e9;
 
+/// Most shaft segments a feather may have (`PlumageConfig.shaft_segments`
+/// is 1 to this).
+pub const PLUMAGE_MAX_SHAFT_SEGMENTS: u32 = 4;
+
+/// Most triangles of one feather as `plumage_system_feather_triangles`
+/// copies them out (nine floats each): for sizing a buffer per feather.
+pub const PLUMAGE_MAX_FEATHER_TRIANGLES: u32 = 14;
+
+/// Bend limit of the defaults, radians (`PlumageConfig.bend_limit`).
+pub const PLUMAGE_DEFAULT_BEND_LIMIT: f32 = 0.4;
+
+const _: () = assert!(PLUMAGE_MAX_SHAFT_SEGMENTS as usize == crate::feather::MAX_SEGMENTS);
+const _: () = assert!(PLUMAGE_MAX_FEATHER_TRIANGLES as usize == crate::feather::MAX_TRIANGLES);
+const _: () = assert!(PLUMAGE_DEFAULT_BEND_LIMIT == crate::adjustment::DEFAULT_BEND_LIMIT);
+
 const _: () = assert!(PLUMAGE_MAX_FEATHERS as usize == crate::limits::MAX_FEATHERS);
 
 const _: () = assert!(PLUMAGE_MAX_COORDINATE == crate::limits::MAX_COORDINATE);
