@@ -5,6 +5,7 @@
 //! keeps an animated bent coat from popping.
 
 use super::checks::{CheckHints, FeatherInPlace, boxes_clear, exact_check};
+use super::height_field::SOCKET_FRACTION;
 use super::sweep::{fill_swept_triangles, swept_drape};
 use super::{AdjustParams, HeightField, ObstacleFeather};
 
@@ -36,9 +37,11 @@ pub(super) fn drape(
     scratch: &mut HeightField,
 ) -> (FeatherPose, bool) {
     let gap = params.clearance * at.shape.thickness;
-    fill_swept_triangles(scratch, obstacles, straight.roll, gap, params.body_clearance_angle.max(0.0).tan());
+    let skin_slope = params.body_clearance_angle.max(0.0).tan();
+    let (local_obstacles, local_body) = (&scratch.local_obstacles, &scratch.local_body);
+    fill_swept_triangles(&mut scratch.swept, local_obstacles, local_body, obstacles, straight.roll, gap, skin_slope);
     let sized = at.shape.scaled(straight.scale);
-    if let Some(pose) = swept_drape(scratch, &sized, straight, params)
+    if let Some(pose) = swept_drape(&scratch.swept, SOCKET_FRACTION, &sized, straight, params)
         && exact_check(at, pose, scratch, true, &mut CheckHints::default())
     {
         return (pose, false);

@@ -31,9 +31,8 @@
 //! makes room (bisected). One exact check of the whole feather confirms the
 //! result; where it fails the caller falls back to the descent.
 
-use super::height_field::{SOCKET_FRACTION, max_f};
-use super::{AdjustParams, HeightField, ObstacleFeather};
-use crate::feather::{FeatherPose, FeatherShape, MAX_SEGMENTS};
+use super::{AdjustParams, ObstacleFeather};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_SEGMENTS};
 use crate::validation::ROOT_ALLOWANCE;
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_PI_2;
@@ -76,30 +75,31 @@ struct CutPrism {
     raise: Vec2,
 }
 
-/// The triangles the field rasterised (the near obstacles, each with its
-/// raised top, and the skin near the root; already in the root frame) in
-/// the roll frame of `roll`: `field.swept`. The drape keeps a clearance
+/// The triangles the height field rasterised (`local_obstacles`, one entry
+/// for each obstacle of `obstacles` not on the far side, each with its
+/// raised top, and `local_body`, the skin near the root; in the root frame)
+/// in the roll frame of `roll`, into `swept`. The drape keeps a clearance
 /// from them, so that a motion by a rounding error cannot make it touch:
 /// obstacles are lifted by `gap`, the skin by `skin_slope` times the
 /// distance along the root's tangent (the kite's clearance angle).
 pub(super) fn fill_swept_triangles(
-    field: &mut HeightField,
+    swept: &mut Vec<SweptTriangle>,
+    local_obstacles: &[FeatherTriangles],
+    local_body: &[[Vec3; 3]],
     obstacles: &[ObstacleFeather],
     roll: f32,
     gap: f32,
     skin_slope: f32,
 ) {
-    let mut swept = std::mem::take(&mut field.swept);
     swept.clear();
     let (sb, cb) = roll.sin_cos();
     let unroll = |p: Vec3, lift: f32| Vec3::new(p.x, p.y * cb + p.z * sb, p.z * cb - p.y * sb + lift);
     let near = obstacles.iter().filter(|o| !o.far_side);
-    for (local, o) in field.local_obstacles.iter().zip(near) {
-        push_swept(&mut swept, local, o.thickness, false, |p| unroll(p, gap));
+    for (local, o) in local_obstacles.iter().zip(near) {
+        push_swept(swept, local, o.thickness, false, |p| unroll(p, gap));
     }
     // A shear (linear, so a triangle stays one), lifting the skin ahead.
-    push_swept(&mut swept, &field.local_body, 0.0, true, |p| unroll(p, p.x * skin_slope));
-    field.swept = swept;
+    push_swept(swept, local_body, 0.0, true, |p| unroll(p, p.x * skin_slope));
 }
 
 impl CutPrism {
@@ -132,10 +132,10 @@ pub(crate) const PIECES: usize = 3;
 /// spans and the widest half-width of the vane over them. The root
 /// segment's first piece starts at the root socket's end (a neighbour's
 /// vane beside the root passes beside the narrow shaft there).
-fn piece_of(shape: &FeatherShape, k: usize, p: usize) -> (f32, f32, f32) {
+fn piece_of(shape: &FeatherShape, socket: f32, k: usize, p: usize) -> (f32, f32, f32) {
     let seg_len = shape.length / shape.segment_count() as f32;
     let (r_in, r_out) = (seg_len * p as f32 / PIECES as f32, seg_len * (p + 1) as f32 / PIECES as f32);
-    let r_in = if k == 0 && p == 0 { SOCKET_FRACTION * shape.length } else { r_in };
+    let r_in = if k == 0 && p == 0 { socket * shape.length } else { r_in };
     let a = k as f32 * seg_len;
     (r_in, r_out, widest_half_width(shape, a + r_in, a + r_out))
 }
@@ -164,7 +164,7 @@ fn widest_half_width(s: &FeatherShape, a: f32, b: f32) -> f32 {
     if a <= corner && corner <= b {
         return 0.5 * s.width;
     }
-    max_f(s.half_width_at(a.min(s.length)), s.half_width_at(b.min(s.length))).max(0.0)
+    s.half_width_at(a.min(s.length)).max(s.half_width_at(b.min(s.length))).max(0.0)
 }
 
 /// One segment: its joint in the roll frame's (x, z) plane and its length.
@@ -387,10 +387,10 @@ fn prism_holds(lower: &[Vec2], raise: Vec2, j: Vec2) -> bool {
 
 /// The lowest angle in `[lo, hi]` at which the segment clears the obstacle
 /// prisms and the skin; `None` when it is blocked.
-fn lowest_clear_angle(field: &HeightField, seg: &Segment, lo: f32, hi: f32) -> Option<f32> {
+fn lowest_clear_angle(swept: &[SweptTriangle], seg: &Segment, lo: f32, hi: f32) -> Option<f32> {
     let mut angle = lo;
     let sweep = Sweep::new(seg, lo, hi);
-    for t in &field.swept {
+    for t in swept {
         if t.hi.x < sweep.box_lo.x || t.lo.x > sweep.box_hi.x || t.hi.z < sweep.box_lo.y || t.lo.z > sweep.box_hi.y {
             continue;
         }
@@ -398,10 +398,10 @@ fn lowest_clear_angle(field: &HeightField, seg: &Segment, lo: f32, hi: f32) -> O
             if t.hi.y < -half || t.lo.y > half {
                 continue;
             }
-            let r_in = if t.skin { max_f(r_in, seg.skin_from) } else { r_in };
+            let r_in = if t.skin { r_in.max(seg.skin_from) } else { r_in };
             match sector_of_prism(t, half, seg.joint, (r_in, r_out), &sweep) {
                 Contact::None => {}
-                Contact::At(a) => angle = max_f(angle, a + ANGLE_EPSILON),
+                Contact::At(a) => angle = angle.max(a + ANGLE_EPSILON),
                 Contact::Blocks => return None,
             }
         }
@@ -415,10 +415,12 @@ fn lowest_clear_angle(field: &HeightField, seg: &Segment, lo: f32, hi: f32) -> O
 /// The swept drape from the straight pose (see the module notes): the pose
 /// with the straight pose's roll and scale and each segment's lowest clear
 /// angle, or `None` when there is no room within the limits. `shape` is the
-/// feather at its size. Reads the swept triangles of `field` (see
-/// [`fill_swept_triangles`]).
+/// feather at its size, `swept` what lies beneath it (see
+/// [`fill_swept_triangles`]), `socket` the root socket as a fraction of the
+/// length (nothing nearer the root is swept for obstacles).
 pub(super) fn swept_drape(
-    field: &HeightField,
+    swept: &[SweptTriangle],
+    socket: f32,
     shape: &FeatherShape,
     straight: FeatherPose,
     params: &AdjustParams,
@@ -427,7 +429,7 @@ pub(super) fn swept_drape(
     let segments = shape.segment_count();
     let seg_len = shape.length / segments as f32;
     let pieces: [[(f32, f32, f32); PIECES]; MAX_SEGMENTS] =
-        std::array::from_fn(|k| std::array::from_fn(|p| piece_of(shape, k.min(segments - 1), p)));
+        std::array::from_fn(|k| std::array::from_fn(|p| piece_of(shape, socket, k.min(segments - 1), p)));
     let bounds = |angles: &[f32; MAX_SEGMENTS], k: usize| {
         if k == 0 { (params.min_pitch, straight.pitch) } else { (angles[k - 1] + bend_low, angles[k - 1] + bend_high) }
     };
@@ -449,7 +451,7 @@ pub(super) fn swept_drape(
     let drape_from = |angles: &mut [f32; MAX_SEGMENTS], from: usize, to: usize| -> Option<usize> {
         for k in from..=to {
             let (lo, hi) = bounds(angles, k);
-            match lowest_clear_angle(field, &segment(angles, k), lo, hi) {
+            match lowest_clear_angle(swept, &segment(angles, k), lo, hi) {
                 // Fluffiness lifts the root segment off what it lies on (it
                 // is clear from its lowest angle up).
                 Some(a) if k == 0 => angles[k] = (a + params.fluffiness.max(0.0)).min(hi),
@@ -508,7 +510,7 @@ pub(super) fn swept_drape(
 #[cfg(test)]
 mod tests {
     use super::super::checks::pose_is_clear;
-    use super::super::{AdjustSteps, DrapeRoute, adjust_feather};
+    use super::super::{AdjustSteps, DrapeRoute, HeightField, adjust_feather};
     use super::*;
     use crate::body::BodyIndex;
     use crate::feather::{feather_triangles, tip_position};
