@@ -59,7 +59,12 @@ fn clip_runs(base: &Config, rest: &common::shapes::Shape, frames: &[Vec<f32>]) -
     let reb = run("rebuild", mode(Mode::Rebuild), rest, frames);
     let leg = run("legacy", mode(Mode::Legacy), rest, frames);
     let paper = run("paper's rule", Config { drift_tolerance: 0.05, ..mode(Mode::Incremental) }, rest, frames);
-    println!("flamingo clip: {} frames, {} feathers, {} shaft segments", frames.len(), inc.feathers, base.shaft_segments);
+    println!(
+        "flamingo clip: {} frames, {} feathers, {} shaft segments",
+        frames.len(),
+        inc.feathers,
+        base.shaft_segments
+    );
     for r in [&inc, &paper, &reb, &leg] {
         println!(
             "{:>12}: max intersecting pairs {}, max body penetrations {}, mean adjusted {:.1}, mean pitch {:.2}° (first {:.2}°, last {:.2}°, drift vs rebuild {:+.2}°), mean tip height {:.3} (drift vs rebuild {:+.3})",
