@@ -7,7 +7,7 @@
 use super::checks::{CheckHints, FeatherInPlace, boxes_clear, exact_check};
 use super::height_field::SOCKET_FRACTION;
 use super::sweep::{fill_swept_triangles, swept_drape};
-use super::{AdjustParams, HeightField, ObstacleFeather};
+use super::{AdjustParams, DrapeRoute, HeightField, ObstacleFeather};
 
 use crate::feather::{FeatherPose, segment_triangles};
 use crate::validation::FeatherBoxes;
@@ -28,14 +28,14 @@ const DRAPE_RAISE_BISECTIONS: usize = 6;
 /// Drapes a segmented feather (DESIGN.md §4, bending) from its straight
 /// pose: the swept drape ([`super::sweep`]) confirmed by one exact check of
 /// the whole feather, else the descent by exact checks ([`descent_drape`]).
-/// The second of the pair tells whether the descent was taken.
+/// Returns the pose and the way it was found.
 pub(super) fn drape(
     at: &FeatherInPlace<'_>,
     obstacles: &[ObstacleFeather],
     straight: FeatherPose,
     params: &AdjustParams,
     scratch: &mut HeightField,
-) -> (FeatherPose, bool) {
+) -> (FeatherPose, DrapeRoute) {
     let gap = params.clearance * at.shape.thickness;
     let skin_slope = params.body_clearance_angle.max(0.0).tan();
     let (local_obstacles, local_body) = (&scratch.local_obstacles, &scratch.local_body);
@@ -44,9 +44,9 @@ pub(super) fn drape(
     if let Some(pose) = swept_drape(&scratch.swept, SOCKET_FRACTION, &sized, straight, params)
         && exact_check(at, pose, scratch, true, &mut CheckHints::default())
     {
-        return (pose, false);
+        return (pose, DrapeRoute::Swept);
     }
-    (descent_drape(at, straight, params, scratch), true)
+    (descent_drape(at, straight, params, scratch), DrapeRoute::Descent)
 }
 
 /// The drape by exact checks. The straight pose

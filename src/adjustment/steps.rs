@@ -84,8 +84,7 @@ pub(crate) fn adjust_feather_boxed(
     if at.shape.segment_count() == 1 || params.bend_limit <= 0.0 || straight.pose.scale <= 0.0 {
         return straight;
     }
-    let (draped, descended) = drape(at, obstacles, straight.pose, params, scratch);
-    let route = if descended { DrapeRoute::Descent } else { DrapeRoute::Swept };
+    let (draped, route) = drape(at, obstacles, straight.pose, params, scratch);
     AdjustOutcome { pose: draped, drape: route, ..straight }
 }
 

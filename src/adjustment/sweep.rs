@@ -103,10 +103,8 @@ pub(super) fn fill_swept_triangles(
 }
 
 impl CutPrism {
+    /// `t` cut to the band `|y| ≤ half_width`; `None` when nothing is left.
     fn of(t: &SweptTriangle, half_width: f32) -> Option<Self> {
-        if t.hi.y < -half_width || t.lo.y > half_width {
-            return None;
-        }
         let mut lower = [Vec2::ZERO; CUT_VERTICES];
         let n = if t.lo.y >= -half_width && t.hi.y <= half_width {
             // Wholly within the band (the box counts the raise too).
@@ -151,8 +149,8 @@ fn push_swept(
         let corners = t.map(&unroll);
         let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]).normalize_or_zero();
         let raise = n * thickness;
-        let lo = corners[0].min(corners[1]).min(corners[2]).min(corners[0].min(corners[1]).min(corners[2]) + raise);
-        let hi = corners[0].max(corners[1]).max(corners[2]).max(corners[0].max(corners[1]).max(corners[2]) + raise);
+        let (lo, hi) = (corners[0].min(corners[1]).min(corners[2]), corners[0].max(corners[1]).max(corners[2]));
+        let (lo, hi) = (lo.min(lo + raise), hi.max(hi + raise));
         out.push(SweptTriangle { skin, corners, raise, lo, hi });
     }
 }
@@ -207,10 +205,14 @@ fn sector_of_prism(t: &SweptTriangle, half_width: f32, j: Vec2, (r_in, r): (f32,
     // slope over the part within the piece's annulus lie at the cut edges'
     // ends and where they cross the annulus' circles.
     let (ms, mc) = (sweep.mid_sin, sweep.mid_cos);
-    let along = |p: Vec2| mc * (p.x - j.x) + ms * (p.y - j.y);
-    let slope = |p: Vec2| {
+    // A point's coordinates along the middle direction and across it.
+    let along_up = |p: Vec2| {
         let d = p - j;
-        let (along, up) = (mc * d.x + ms * d.y, mc * d.y - ms * d.x);
+        (mc * d.x + ms * d.y, mc * d.y - ms * d.x)
+    };
+    let along = |p: Vec2| along_up(p).0;
+    let slope = |p: Vec2| {
+        let (along, up) = along_up(p);
         if along > 0.0 { up / along } else { f32::INFINITY.copysign(up) }
     };
     let (mut min_s, mut max_s) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -251,7 +253,7 @@ fn sector_of_prism(t: &SweptTriangle, half_width: f32, j: Vec2, (r_in, r): (f32,
                     take(p + (q - p) * s);
                 }
             }
-            if r_in > 0.0 && (dp > r2_in || dq > r2_in) && (dp < r2 || dq < r2 || dp.min(dq) > 0.0) {
+            if r_in > 0.0 && (dp > r2_in || dq > r2_in) {
                 for s in circle_crossings(p, q, j, r_in) {
                     take(p + (q - p) * s);
                 }
