@@ -11,10 +11,12 @@
 //! settles a ray grazing an edge or a mesh with holes.
 
 use crate::body::BodyIndex;
+use crate::error::{Error, ErrorKind, Result};
 use crate::intersect::triangles_intersect;
 use crate::triangle_grid::{Aabb, ray_triangle};
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Offset of the point whose winding number is measured, off the skin
 /// along its normal, as a fraction of the body's extent: far enough that
@@ -54,13 +56,19 @@ impl<'a> BodyInterior<'a> {
     /// least two of three rays. A triangle without area (whose normal is
     /// not finite) counts for no ray.
     pub fn holds(&self, p: Vec3, n: Vec3) -> bool {
+        self.holds_within(p, n, &WorkBudget::unlimited())
+    }
+
+    /// As [`BodyInterior::holds`], spending `budget` on the rays' triangle
+    /// tests; with the budget spent, `false` without a test.
+    fn holds_within(&self, p: Vec3, n: Vec3, budget: &WorkBudget) -> bool {
         // A degenerate face has no normal: it is judged visible.
         if self.body.triangle_count() == 0 || !p.is_finite() || !n.is_finite() || n == Vec3::ZERO {
             return false;
         }
         let origin = p + n * self.offset;
         let (u, v) = n.any_orthonormal_pair();
-        let inside_along = |dir: Vec3| self.winding_along_ray(origin, dir) >= 1;
+        let inside_along = |dir: Vec3| !budget.exhausted() && self.winding_along_ray(origin, dir, budget) >= 1;
         let (first, second) = (inside_along(n), inside_along((n + u * WINDING_RAY_TILT).normalize()));
         // Two rays that agree are already the majority.
         if first == second { first } else { inside_along((n - v * WINDING_RAY_TILT).normalize()) }
@@ -75,19 +83,32 @@ impl<'a> BodyInterior<'a> {
     /// corners too, and patches then mixed inside and outside (the bird's
     /// coverage fell from 0.880 to 0.864).
     pub fn face_burials(&self, triangles: &[[u32; 3]]) -> Vec<FaceBurial> {
+        self.face_burials_within(triangles, &WorkBudget::unlimited())
+    }
+
+    /// As [`BodyInterior::face_burials`], spending `budget` on each face's
+    /// box query, crossing tests and rays; once it is spent, the remaining
+    /// faces are judged crossed without any test (the caller refuses the
+    /// mesh, see [`WorkBudget::exhausted`]).
+    fn face_burials_within(&self, triangles: &[[u32; 3]], budget: &WorkBudget) -> Vec<FaceBurial> {
         (0..triangles.len())
             .into_par_iter()
             .map_init(Vec::new, |nearby, f| {
+                if budget.exhausted() {
+                    return FaceBurial::Crossed;
+                }
                 let corners = self.body.corners(f as u32);
                 self.body.triangles_in_box(&Aabb::of_triangle(&corners), nearby);
+                let mut tests = nearby.len() as u64;
                 let crossed = nearby.iter().any(|&g| {
                     let other = triangles[g as usize];
-                    g as usize != f
-                        && !other.iter().any(|v| triangles[f].contains(v))
-                        && triangles_intersect(&corners, &self.body.corners(g))
+                    let candidate = g as usize != f && !other.iter().any(|v| triangles[f].contains(v));
+                    tests += candidate as u64;
+                    candidate && triangles_intersect(&corners, &self.body.corners(g))
                 });
+                budget.spend(tests);
                 let centroid = (corners[0] + corners[1] + corners[2]) / 3.0;
-                match (crossed, self.holds(centroid, self.body.normal(f as u32))) {
+                match (crossed, self.holds_within(centroid, self.body.normal(f as u32), budget)) {
                     (true, _) => FaceBurial::Crossed,
                     (false, true) => FaceBurial::Buried,
                     (false, false) => FaceBurial::Visible,
@@ -104,13 +125,14 @@ impl<'a> BodyInterior<'a> {
     /// (a stamp per triangle, per thread): a soup of large faces crossing
     /// one another, or a few huge faces among tiny ones, otherwise tested
     /// the same face in every cell the ray walked.
-    fn winding_along_ray(&self, origin: Vec3, dir: Vec3) -> i32 {
+    fn winding_along_ray(&self, origin: Vec3, dir: Vec3, budget: &WorkBudget) -> i32 {
         let grid = self.body.grid();
         RAY_STAMPS.with(|stamps| {
             let mut stamps = stamps.borrow_mut();
             let stamp = stamps.next(grid.len());
-            let mut winding = 0;
+            let (mut winding, mut tests) = (0, 0u64);
             grid.ray_cast(origin, dir, f32::INFINITY, |t| {
+                tests += 1;
                 if stamps.first_visit(t, stamp) && ray_triangle(origin, dir, grid.corners(t)).is_some() {
                     let c = self.body.normal(t).dot(dir);
                     if c.is_finite() && c != 0.0 {
@@ -119,10 +141,55 @@ impl<'a> BodyInterior<'a> {
                 }
                 None
             });
+            budget.spend(tests);
             winding
         })
     }
 }
+
+/// A cap on the triangle tests (box-query results, crossing tests, ray
+/// tests) that telling buried skin from visible skin may take. On a real
+/// skin these stay within a few thousand per triangle and root; a mesh whose
+/// triangles are long and cross one another everywhere (positions read
+/// with the wrong stride or offset) needs about one test per triangle of the
+/// whole mesh for every ray, and would otherwise sample for minutes.
+///
+/// Spending is counted, never ordered: whether the budget runs out depends
+/// only on the total work the unbounded judgement would do, not on the
+/// thread count or schedule, so the outcome (done, or refused) is
+/// deterministic.
+pub struct WorkBudget {
+    left: AtomicU64,
+}
+
+impl WorkBudget {
+    /// A budget of `tests` triangle tests.
+    pub fn new(tests: u64) -> Self {
+        Self { left: AtomicU64::new(tests) }
+    }
+
+    /// A budget that never runs out.
+    pub fn unlimited() -> Self {
+        Self::new(u64::MAX)
+    }
+
+    /// Spends `tests`, saturating at zero.
+    fn spend(&self, tests: u64) {
+        let _ = self.left.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |left| Some(left.saturating_sub(tests)));
+    }
+
+    /// Whether the budget is spent.
+    pub fn exhausted(&self) -> bool {
+        self.left.load(Ordering::Relaxed) == 0
+    }
+}
+
+/// Triangle tests allowed per body triangle and per root aimed at (see
+/// [`WorkBudget`]): the shared test models take at most about 1 000.
+pub const BURIAL_TESTS_PER_ELEMENT: u64 = 4096;
+
+/// Triangle tests always allowed, whatever the mesh's size.
+pub const BURIAL_TESTS_FLOOR: u64 = 1 << 22;
 
 /// Per-thread marks of the triangles one ray has tested: `marks[t] ==
 /// stamp` once triangle `t` was tested by the current ray.
@@ -166,15 +233,43 @@ pub struct BuriedSkin {
     body: BodyIndex,
     offset: f32,
     faces: Vec<FaceBurial>,
+    budget: WorkBudget,
 }
 
 impl BuriedSkin {
-    /// The buried part of the mesh (`positions`, `triangles`) at that pose.
-    pub fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
+    /// The buried part of the mesh (`positions`, `triangles`) at that pose,
+    /// judged within a budget of [`BURIAL_TESTS_PER_ELEMENT`] × (triangles +
+    /// `roots`) + [`BURIAL_TESTS_FLOOR`] triangle tests for this and every
+    /// later [`BuriedSkin::holds`]. Fails (before any later work) when
+    /// judging the faces alone spends it.
+    pub fn new(positions: &[Vec3], triangles: &[[u32; 3]], roots: usize) -> Result<Self> {
+        let elements = (triangles.len() as u64).saturating_add(roots as u64);
+        let budget =
+            WorkBudget::new(elements.saturating_mul(BURIAL_TESTS_PER_ELEMENT).saturating_add(BURIAL_TESTS_FLOOR));
         let body = BodyIndex::from_mesh(positions, triangles);
         let interior = BodyInterior::new(&body);
-        let (offset, faces) = (interior.offset, interior.face_burials(triangles));
-        Self { body, offset, faces }
+        let (offset, faces) = (interior.offset, interior.face_burials_within(triangles, &budget));
+        let skin = Self { body, offset, faces, budget };
+        skin.within_budget()?;
+        Ok(skin)
+    }
+
+    /// `Ok` while the judgements made so far kept within the budget; once
+    /// they did not, the error that refuses the mesh (every judgement made
+    /// after that point answered "visible" without a test).
+    pub fn within_budget(&self) -> Result<()> {
+        if !self.budget.exhausted() {
+            return Ok(());
+        }
+        let crossed = self.faces.iter().filter(|&&f| f == FaceBurial::Crossed).count();
+        Err(Error::new(
+            ErrorKind::InvalidMesh,
+            format!(
+                "the mesh looks scrambled: {crossed} of its {} triangles cross other triangles (or were not reached), and telling buried skin from visible skin needs more than {} triangle tests per triangle and feather; were the positions or indices read with the wrong stride, offset or type?",
+                self.faces.len(),
+                BURIAL_TESTS_PER_ELEMENT
+            ),
+        ))
     }
 
     /// How face `f` lies.
@@ -187,7 +282,9 @@ impl BuriedSkin {
         match self.faces[f] {
             FaceBurial::Visible => false,
             FaceBurial::Buried => true,
-            FaceBurial::Crossed => BodyInterior { body: &self.body, offset: self.offset }.holds(p, n),
+            FaceBurial::Crossed => {
+                BodyInterior { body: &self.body, offset: self.offset }.holds_within(p, n, &self.budget)
+            }
         }
     }
 }

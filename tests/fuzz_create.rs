@@ -15,12 +15,16 @@
 mod common;
 
 use common::fuzz::{self, Rng, Tally};
-use common::shapes::{Shape, cylinder, grid, thin_box};
+use common::shapes::{Shape, cylinder, grid, swim_body, thin_box};
 use plumage::ffi::*;
 use std::ptr::null;
 
-/// A mesh to start from: a random soup or a procedural shape.
+/// A mesh to start from: a random soup, a procedural shape, or (one case
+/// in ten) a real mesh read wrongly or a soup of long crossing triangles.
 fn base_mesh(rng: &mut Rng) -> Shape {
+    if rng.chance(0.1) {
+        return scrambled_mesh(rng);
+    }
     match rng.below(5) {
         0 | 1 => {
             let n = 1 + rng.below(60);
@@ -37,6 +41,74 @@ fn base_mesh(rng: &mut Rng) -> Shape {
             1 + rng.below(6),
             1 + rng.below(6),
         ),
+    }
+}
+
+/// The shared models' bytes, read once (those missing are left out).
+fn shared_models() -> &'static [Vec<u8>] {
+    static MODELS: std::sync::OnceLock<Vec<Vec<u8>>> = std::sync::OnceLock::new();
+    MODELS.get_or_init(|| {
+        ["Flamingo.glb", "Fox.glb", "bird.glb"]
+            .iter()
+            .filter_map(|f| std::fs::read(common::gltf_mesh::data_dir().join(f)).ok())
+            .collect()
+    })
+}
+
+/// What a loader that gets the layout wrong hands over (issue 36): a real
+/// mesh (a shared model, else the built-in body) with its positions re-read
+/// at a wrong stride or offset, or its indices shuffled or shifted; or a
+/// soup of a few thousand long triangles crossing one another.
+fn scrambled_mesh(rng: &mut Rng) -> Shape {
+    let models = shared_models();
+    let real = |rng: &mut Rng| match models.len() {
+        0 => swim_body(8 + rng.below(40), 8 + rng.below(56)),
+        n => common::gltf_mesh::read_glb(&models[rng.below(n)]).expect("readable GLB"),
+    };
+    match rng.below(4) {
+        0 if !models.is_empty() => {
+            let bytes = &models[rng.below(models.len())];
+            common::gltf_mesh::misread_glb(bytes, 4 * (2 + rng.below(14)), rng.below(48))
+        }
+        0 | 1 => {
+            // Interleaved position, normal and UV read as if packed.
+            let m = real(rng);
+            let mut words = Vec::with_capacity(m.positions.len() / 3 * 8);
+            for p in m.positions.chunks(3) {
+                words.extend_from_slice(p);
+                words.extend_from_slice(&[rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)]);
+                words.extend_from_slice(&[rng.unit(), rng.unit()]);
+            }
+            let (stride, offset) = (1 + rng.below(10), rng.below(8));
+            let positions =
+                (0..m.positions.len()).map(|k| words[(offset + (k / 3) * stride + k % 3) % words.len()]).collect();
+            Shape { positions, indices: m.indices }
+        }
+        2 => {
+            let mut m = real(rng);
+            let vertices = (m.positions.len() / 3).max(1) as u32;
+            if rng.chance(0.5) {
+                for k in (1..m.indices.len()).rev() {
+                    m.indices.swap(k, rng.below(k + 1));
+                }
+            } else {
+                let shift = 1 + rng.below(vertices as usize) as u32;
+                m.indices.iter_mut().for_each(|i| *i = (*i + shift) % vertices);
+            }
+            m
+        }
+        _ => {
+            let (n, long) = (500 + rng.below(4000), rng.range(0.2, 1.5));
+            let mut m = Shape::default();
+            for t in 0..n as u32 {
+                let c = [rng.unit(), rng.unit(), rng.unit()];
+                for _ in 0..3 {
+                    m.positions.extend(c.iter().map(|x| x + long * (rng.unit() - 0.5)));
+                }
+                m.indices.extend_from_slice(&[3 * t, 3 * t + 1, 3 * t + 2]);
+            }
+            m
+        }
     }
 }
 

@@ -105,7 +105,7 @@ pub fn sample_roots_with_progress(
     progress: &Progress,
 ) -> Result<Sampling> {
     let planted = plant_roots_with_progress(mesh, surface, fields, config, progress)?;
-    let metrics = planted.metrics(surface, &mesh.positions, fields, &planted.roots, config.theta);
+    let metrics = planted.metrics(surface, &mesh.positions, fields, &planted.roots, config.theta)?;
     let Planted { roots, spacing, seconds, passes, first_pass_roots, .. } = planted;
     Ok(Sampling { roots, spacing, metrics, seconds, passes, first_pass_roots })
 }
@@ -139,8 +139,11 @@ impl Planted {
         fields: &Fields,
         roots: &[RootBinding],
         theta: f32,
-    ) -> SamplingMetrics {
-        sampling_metrics(surface, positions, fields, &self.buried, roots, self.spacing, theta)
+    ) -> Result<SamplingMetrics> {
+        let metrics = sampling_metrics(surface, positions, fields, &self.buried, roots, self.spacing, theta);
+        // Probes judged after the burial budget ran out were taken as visible.
+        self.buried.within_budget()?;
+        Ok(metrics)
     }
 }
 
@@ -163,7 +166,7 @@ pub fn plant_roots_with_progress(
     let positions = &mesh.positions;
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
-    let buried = BuriedSkin::new(positions, &mesh.triangles);
+    let buried = BuriedSkin::new(positions, &mesh.triangles, target_feathers(config))?;
     progress.check(Phase::Sampling, 0.0)?;
     let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
@@ -181,6 +184,7 @@ pub fn plant_roots_with_progress(
     };
     // A pass cut short by the progress has set its stop flag.
     progress.check(Phase::Sampling, 0.9)?;
+    buried.within_budget()?;
     let roots = match &pool {
         Some(pool) => bind_roots(surface, positions, fields, pool, &samples, config.seed),
         None => Vec::new(),

@@ -135,7 +135,7 @@ impl System {
             crate::frame::solve_beside(coat, dressing, &rest, work, progress, || {
                 planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta)
             })
-        })?;
+        })??;
         sampling.relative_radius = metrics.relative_radius;
         sampling.coverage_gap = metrics.coverage_gap;
         sampling.alignment = metrics.alignment;

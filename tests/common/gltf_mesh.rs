@@ -184,3 +184,51 @@ pub fn morph_clip(file: &str, fps: f32) -> Option<(Shape, Vec<Vec<f32>>)> {
         .collect();
     Some((rest, frames))
 }
+
+/// The shape of `file` as a loader that gets the vertex layout wrong reads
+/// it: each primitive's positions re-read from the binary chunk at
+/// `stride` bytes apart starting `offset` bytes after the accessor's start
+/// (ignoring the bufferView's own stride), so that positions mix with the
+/// normals, UVs, joints and indices stored beside them. Reads that would
+/// run past the chunk wrap around to its start. Indices and node placement
+/// are read correctly. A missing file: see [`read_model`].
+pub fn misread_model(file: &str, stride: usize, offset: usize) -> Option<Shape> {
+    let path = data_dir().join(file);
+    let bytes = read_model(&path)?;
+    Some(misread_glb(&bytes, stride, offset))
+}
+
+/// [`misread_model`] on GLB bytes already read.
+pub fn misread_glb(bytes: &[u8], stride: usize, offset: usize) -> Shape {
+    let mut shape = read_glb(bytes).expect("readable GLB");
+    let gltf = gltf::Gltf::from_slice(bytes).expect("readable GLB");
+    let blob = gltf.blob.as_deref().expect("a binary chunk");
+    // The positions are replaced wholesale, one position accessor after
+    // another (cycling), as far as the shape's vertex count reaches.
+    let mut starts = Vec::new();
+    for mesh in gltf.meshes() {
+        for p in mesh.primitives() {
+            if let Some(a) = p.get(&gltf::Semantic::Positions) {
+                if let Some(view) = a.view() {
+                    starts.push((view.offset() + a.offset(), a.count()));
+                }
+            }
+        }
+    }
+    let word = |at: usize| -> f32 {
+        let at = at % (blob.len() - 3);
+        f32::from_le_bytes([blob[at], blob[at + 1], blob[at + 2], blob[at + 3]])
+    };
+    let mut out = Vec::with_capacity(shape.positions.len());
+    'fill: for &(start, count) in starts.iter().cycle().take(starts.len().max(1) * 64) {
+        for v in 0..count {
+            if out.len() >= shape.positions.len() {
+                break 'fill;
+            }
+            let at = start + offset + v * stride;
+            out.extend_from_slice(&[word(at), word(at + 4), word(at + 8)]);
+        }
+    }
+    shape.positions = out;
+    shape
+}
