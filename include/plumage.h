@@ -21,8 +21,15 @@
  *
  * Thread safety
  *   - Functions taking `const PlumageSystem *` only read and may run
- *     concurrently with each other on the same system.
- *   - Functions taking `PlumageSystem *` need exclusive access to it.
+ *     concurrently with each other on the same system (lock-free: they
+ *     never wait for one another).
+ *   - Functions taking `PlumageSystem *` (destroy included) need exclusive
+ *     access to it. A call that overlaps one of them on the same system,
+ *     from another thread or from the running call's own callback, returns
+ *     PLUMAGE_STATUS_BUSY and touches nothing; so does a read-only call made
+ *     while a mutating call runs. The guard is one atomic word: no call
+ *     ever blocks on it. A call made after destroy returned OK is not
+ *     caught (the memory is gone).
  *   - Separate systems share no state and may be used from different
  *     threads at the same time. Workers (PlumageConfig.threads): with
  *     threads = 1 no thread is started, every call runs on the thread that
@@ -141,6 +148,14 @@
 #define PLUMAGE_STATUS_LIMIT_EXCEEDED 17
 
 /**
+ * Another call is running on the same system (from another thread, or
+ * from the progress callback of the running call): a system admits one
+ * mutating call (or destroy) at a time and no read-only call during one.
+ * Nothing was done; the call may be retried once the other has returned.
+ */
+#define PLUMAGE_STATUS_BUSY 18
+
+/**
  * `PlumageConfig.sampler`: orientation-field-guided sampling (paper, Algorithm 1).
  */
 #define PLUMAGE_SAMPLER_GUIDED 0
@@ -249,6 +264,17 @@
 #define PLUMAGE_DEFAULT_BEND_LIMIT 0.4
 
 /**
+ * Triangle tests allowed per body triangle and per root aimed at (see
+ * [`WorkBudget`]): the shared test models take at most about 1 000.
+ */
+#define BURIAL_TESTS_PER_ELEMENT 4096
+
+/**
+ * Triangle tests always allowed, whatever the mesh's size.
+ */
+#define BURIAL_TESTS_FLOOR (1 << 22)
+
+/**
  * An opaque feathering system. Create with `plumage_system_create`, free
  * with `plumage_system_destroy`.
  */
@@ -262,8 +288,9 @@ typedef struct PlumageSystem PlumageSystem;
  * nothing). It is called at least every few milliseconds while the library
  * works, never from two threads at once: with `threads = 1` always on the
  * thread that made the call (create, step, evaluate or validate); with more threads
- * on that thread or on one of the system's worker threads. It must not
- * call back into the same system.
+ * on that thread or on one of the system's worker threads. A call from it
+ * into the same system returns PLUMAGE_STATUS_BUSY (read-only calls from
+ * validate's callback excepted: they may run beside it).
  */
 typedef int32_t (*PlumageProgressFn)(void *user_data, uint32_t phase, float fraction);
 
@@ -1131,14 +1158,16 @@ uint32_t plumage_system_create(const struct PlumageConfig *cfg,
                                struct PlumageSystem **out);
 
 /**
- * Frees a system and everything it owns. NULL is a no-op. Works on a
- * poisoned system too.
+ * Frees a system and everything it owns. NULL is a no-op (OK). Works on a
+ * poisoned system too. Returns PLUMAGE_STATUS_BUSY, freeing nothing, when
+ * another call is running on the system (see PLUMAGE_STATUS_BUSY).
  *
  * # Safety
  * `sys` is NULL or a live handle from `plumage_system_create`, not used again
- * afterwards and not in use by another thread.
+ * after a call that returned OK. (The BUSY guard catches a call that
+ * overlaps this one; a call made after the system is freed cannot be caught.)
  */
-void plumage_system_destroy(struct PlumageSystem *sys);
+uint32_t plumage_system_destroy(struct PlumageSystem *sys);
 
 /**
  * Advances the animation by one frame: `positions` holds xyz for each of

@@ -79,7 +79,7 @@ fn versions_and_status_names() {
     assert_eq!(v, env!("CARGO_PKG_VERSION"));
     assert_eq!(plumage_abi_version(), PLUMAGE_ABI_VERSION);
     let mut names = std::collections::BTreeSet::new();
-    for s in 0..=PLUMAGE_STATUS_LIMIT_EXCEEDED {
+    for s in 0..=PLUMAGE_STATUS_BUSY {
         let n = name(s);
         assert_ne!(n, "UNKNOWN_STATUS", "status {s} has a name");
         assert!(names.insert(n), "names are distinct");

@@ -41,7 +41,7 @@ fn header_declares_the_contract() {
         "void plumage_config_init(PlumageConfig *cfg)",
         "void plumage_mesh_desc_init(PlumageMeshDesc *mesh)",
         "uint32_t plumage_system_create(const PlumageConfig *cfg, const PlumageMeshDesc *rest, PlumageSystem **out)",
-        "void plumage_system_destroy(PlumageSystem *sys)",
+        "uint32_t plumage_system_destroy(PlumageSystem *sys)",
         "uint32_t plumage_system_step(PlumageSystem *sys, const float *positions, size_t vertex_count)",
         "uint32_t plumage_system_evaluate(PlumageSystem *sys, const float *positions, size_t vertex_count)",
         "uint32_t plumage_system_feather_count(const PlumageSystem *sys, size_t *out)",

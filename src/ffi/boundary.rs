@@ -19,16 +19,22 @@ use super::status::*;
 use crate::System;
 use crate::progress::Progress;
 use std::any::Any;
-use std::cell::{Cell, RefCell};
+use std::cell::{Cell, RefCell, UnsafeCell};
 use std::ffi::CString;
 use std::panic::{AssertUnwindSafe, PanicHookInfo, catch_unwind};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering};
 use std::sync::{Mutex, Once};
 
 /// An opaque feathering system. Create with `plumage_system_create`, free
 /// with `plumage_system_destroy`.
 pub struct PlumageSystem {
-    pub(crate) system: System,
+    /// Reached only through an [`Access`] guard: exclusive for a mutating
+    /// call, shared for a read-only one.
+    system: UnsafeCell<System>,
+    /// Who is inside the system: [`WRITER`], or the number of read-only
+    /// calls running. A call that finds it taken the other way returns
+    /// `PLUMAGE_STATUS_BUSY` without touching the system.
+    access: AtomicU32,
     progress: Option<HostProgress>,
     /// Held by a read-only call that reports progress (validate), so that
     /// two of them on one system never call the host's callback at once.
@@ -40,7 +46,8 @@ pub struct PlumageSystem {
 impl PlumageSystem {
     pub(crate) fn new(system: System, progress: Option<HostProgress>) -> Self {
         Self {
-            system,
+            system: UnsafeCell::new(system),
+            access: AtomicU32::new(0),
             progress,
             progress_calls: Mutex::new(()),
             poisoned: AtomicBool::new(false),
@@ -53,6 +60,10 @@ impl PlumageSystem {
         *slot = to_cstring(message);
     }
 
+    pub(crate) fn set_busy_error(&self) {
+        self.set_error(BUSY_MESSAGE);
+    }
+
     pub(crate) fn last_error(&self) -> CString {
         self.last_error.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
@@ -61,7 +72,71 @@ impl PlumageSystem {
     pub(crate) fn is_poisoned(&self) -> bool {
         self.poisoned.load(Ordering::SeqCst)
     }
+
+    /// Exclusive access for a mutating call (or destroy), or `None` while
+    /// any other call runs on the system.
+    pub(crate) fn enter_exclusive(&self) -> Option<Access<'_>> {
+        self.access.compare_exchange(0, WRITER, Ordering::Acquire, Ordering::Relaxed).ok()?;
+        Some(Access { handle: self, exclusive: true })
+    }
+
+    /// Shared access for a read-only call, or `None` while a mutating call
+    /// runs. Lock-free: read-only calls never wait for one another.
+    pub(crate) fn enter_shared(&self) -> Option<Access<'_>> {
+        let mut now = self.access.load(Ordering::Relaxed);
+        loop {
+            if now & WRITER != 0 || now + 1 == WRITER {
+                return None;
+            }
+            match self.access.compare_exchange_weak(now, now + 1, Ordering::Acquire, Ordering::Relaxed) {
+                Ok(_) => return Some(Access { handle: self, exclusive: false }),
+                Err(seen) => now = seen,
+            }
+        }
+    }
 }
+
+/// The `access` value of a system a mutating call is inside.
+const WRITER: u32 = 1 << 31;
+
+/// A call's admission to a system (see [`PlumageSystem::enter_exclusive`]);
+/// released when dropped.
+pub(crate) struct Access<'a> {
+    handle: &'a PlumageSystem,
+    exclusive: bool,
+}
+
+impl Access<'_> {
+    pub(crate) fn system(&self) -> &System {
+        // SAFETY: while an Access lives, no exclusive one exists besides it
+        // (the access word admits one writer or any number of readers).
+        unsafe { &*self.handle.system.get() }
+    }
+
+    pub(crate) fn system_mut(&mut self) -> &mut System {
+        assert!(self.exclusive, "a shared admission does not give mutable access");
+        // SAFETY: this is the only admission (exclusive), borrowed mutably.
+        unsafe { &mut *self.handle.system.get() }
+    }
+}
+
+impl Drop for Access<'_> {
+    fn drop(&mut self) {
+        if self.exclusive {
+            self.handle.access.store(0, Ordering::Release);
+        } else {
+            self.handle.access.fetch_sub(1, Ordering::Release);
+        }
+    }
+}
+
+// SAFETY: the system inside the UnsafeCell is only reached through Access,
+// which the atomic access word hands out as one writer or many readers;
+// System itself is Send + Sync.
+unsafe impl Sync for PlumageSystem {}
+
+/// The message of a call refused because another call runs on the system.
+const BUSY_MESSAGE: &str = "another call is running on this system (on another thread, or from its callback): a system takes one mutating call at a time, and no read-only call during one";
 
 thread_local! {
     static THREAD_ERROR: RefCell<CString> = RefCell::new(CString::default());
@@ -155,8 +230,13 @@ pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System
         return PLUMAGE_STATUS_NULL_POINTER;
     }
     // SAFETY: the caller passes a pointer from plumage_system_create that it
-    // has not destroyed, and holds exclusive access (header contract).
-    let handle = unsafe { &mut *sys };
+    // has not destroyed (header contract); other calls may be running on it,
+    // so it is only read shared until the access word admits this call.
+    let handle = unsafe { &*sys };
+    let Some(mut access) = handle.enter_exclusive() else {
+        handle.set_busy_error();
+        return PLUMAGE_STATUS_BUSY;
+    };
     if handle.poisoned.load(Ordering::SeqCst) {
         handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
@@ -166,8 +246,9 @@ pub(crate) fn with_system(sys: *mut PlumageSystem, body: impl FnOnce(&mut System
             Some(p) => Progress::to(p),
             None => Progress::none(),
         };
-        body(&mut handle.system, &progress)
+        body(access.system_mut(), &progress)
     });
+    drop(access);
     settle(handle, outcome)
 }
 
@@ -179,11 +260,16 @@ pub(crate) fn with_system_ref(sys: *const PlumageSystem, body: impl FnOnce(&Syst
     }
     // SAFETY: as in `with_system`, shared access only.
     let handle = unsafe { &*sys };
+    let Some(access) = handle.enter_shared() else {
+        handle.set_busy_error();
+        return PLUMAGE_STATUS_BUSY;
+    };
     if handle.poisoned.load(Ordering::SeqCst) {
         handle.set_error("the system is poisoned by an earlier internal error; only destroy is allowed");
         return PLUMAGE_STATUS_POISONED;
     }
-    let outcome = quietly(|| body(&handle.system));
+    let outcome = quietly(|| body(access.system()));
+    drop(access);
     settle(handle, outcome)
 }
 

@@ -204,8 +204,9 @@ pub const PLUMAGE_PRESET_KITE: u32 = 3;
 /// nothing). It is called at least every few milliseconds while the library
 /// works, never from two threads at once: with `threads = 1` always on the
 /// thread that made the call (create, step, evaluate or validate); with more threads
-/// on that thread or on one of the system's worker threads. It must not
-/// call back into the same system.
+/// on that thread or on one of the system's worker threads. A call from it
+/// into the same system returns PLUMAGE_STATUS_BUSY (read-only calls from
+/// validate's callback excepted: they may run beside it).
 pub type PlumageProgressFn = Option<unsafe extern "C" fn(user_data: *mut c_void, phase: u32, fraction: f32) -> i32>;
 
 /// Progress phase: checking and welding the mesh, building the surface.

@@ -6,6 +6,7 @@ use super::boundary::{PlumageSystem, quietly, with_system, without_system};
 use super::config::{HostConfig, PlumageConfig, read_config};
 use super::convention::Failure;
 use super::mesh::{PlumageMeshDesc, checked_len, read_mesh};
+use super::status::{PLUMAGE_STATUS_BUSY, PLUMAGE_STATUS_OK};
 
 /// Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).
 /// On success `*out` receives the new system; on any error `*out` is set to
@@ -44,21 +45,32 @@ pub unsafe extern "C" fn plumage_system_create(
     })
 }
 
-/// Frees a system and everything it owns. NULL is a no-op. Works on a
-/// poisoned system too.
+/// Frees a system and everything it owns. NULL is a no-op (OK). Works on a
+/// poisoned system too. Returns PLUMAGE_STATUS_BUSY, freeing nothing, when
+/// another call is running on the system (see PLUMAGE_STATUS_BUSY).
 ///
 /// # Safety
 /// `sys` is NULL or a live handle from `plumage_system_create`, not used again
-/// afterwards and not in use by another thread.
+/// after a call that returned OK. (The BUSY guard catches a call that
+/// overlaps this one; a call made after the system is freed cannot be caught.)
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) {
+pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) -> u32 {
     if sys.is_null() {
-        return;
+        return PLUMAGE_STATUS_OK;
     }
+    // SAFETY: a live handle (contract); read shared until admitted.
+    let handle = unsafe { &*sys };
+    let Some(access) = handle.enter_exclusive() else {
+        handle.set_busy_error();
+        return PLUMAGE_STATUS_BUSY;
+    };
+    // Admitted: nobody else is inside, and the memory goes away with it.
+    std::mem::forget(access);
     let _ = quietly(|| {
         // SAFETY: from plumage_system_create, not yet destroyed (contract).
         drop(unsafe { Box::from_raw(sys) });
     });
+    PLUMAGE_STATUS_OK
 }
 
 /// Advances the animation by one frame: `positions` holds xyz for each of

@@ -38,6 +38,11 @@ pub const PLUMAGE_STATUS_NOT_AVAILABLE: u32 = 16;
 /// root count of a spacing, coordinate magnitude); refused up front, before
 /// anything large is allocated. The message names the limit.
 pub const PLUMAGE_STATUS_LIMIT_EXCEEDED: u32 = 17;
+/// Another call is running on the same system (from another thread, or
+/// from the progress callback of the running call): a system admits one
+/// mutating call (or destroy) at a time and no read-only call during one.
+/// Nothing was done; the call may be retried once the other has returned.
+pub const PLUMAGE_STATUS_BUSY: u32 = 18;
 
 /// Every status with its name, in numeric order.
 pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
@@ -59,6 +64,7 @@ pub(crate) const STATUS_NAMES: &[(u32, &std::ffi::CStr)] = &[
     (PLUMAGE_STATUS_INVALID_STATE, c"INVALID_STATE"),
     (PLUMAGE_STATUS_NOT_AVAILABLE, c"NOT_AVAILABLE"),
     (PLUMAGE_STATUS_LIMIT_EXCEEDED, c"LIMIT_EXCEEDED"),
+    (PLUMAGE_STATUS_BUSY, c"BUSY"),
 ];
 
 /// The status a safe-API error kind maps to.

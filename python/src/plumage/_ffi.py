@@ -236,7 +236,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_config_init_preset": (c_uint32, [POINTER(Config), c_uint32]),
         "plumage_mesh_desc_init": (None, [POINTER(MeshDesc)]),
         "plumage_system_create": (c_uint32, [POINTER(Config), POINTER(MeshDesc), POINTER(c_void_p)]),
-        "plumage_system_destroy": (None, [sys_p]),
+        "plumage_system_destroy": (c_uint32, [sys_p]),
         "plumage_system_step": (c_uint32, [sys_p, f_p, c_size_t]),
         "plumage_system_evaluate": (c_uint32, [sys_p, f_p, c_size_t]),
         "plumage_system_feather_count": (c_uint32, [sys_p, size_p]),

@@ -346,9 +346,10 @@ class System:
 
     # -- lifetime ---------------------------------------------------------
     def close(self) -> None:
-        """Frees the system (later calls raise). Idempotent."""
+        """Frees the system (later calls raise). Idempotent. Raises (and frees
+        nothing) when another call is running on the system."""
         if self._handle is not None:
-            lib.plumage_system_destroy(self._handle)
+            _check(lib.plumage_system_destroy(self._handle), self._handle, "plumage_system_destroy")
             self._handle = None
 
     def __enter__(self) -> "System":
