@@ -36,7 +36,7 @@ unsafe extern "C" fn probe_callback(user: *mut c_void, _phase: u32, _fraction: f
             barrier.wait();
         }
         None => unsafe {
-            let pos = vec![0.0f32; 3];
+            let pos = [0.0f32; 3];
             probe.step.store(plumage_system_step(sys, pos.as_ptr(), 1), Ordering::SeqCst);
             let mut n = 0usize;
             probe.count.store(plumage_system_feather_count(sys, &mut n), Ordering::SeqCst);
@@ -111,7 +111,7 @@ fn another_thread_is_refused_while_a_step_runs() {
     let other = std::thread::spawn(move || {
         let sys = addr as *mut PlumageSystem;
         barrier.wait();
-        let pos = vec![0.0f32; 3];
+        let pos = [0.0f32; 3];
         let mut n = 0usize;
         let statuses = unsafe {
             [
