@@ -529,6 +529,20 @@ typedef struct PlumageConfig {
    * least 1); past it the oldest is dropped.
    */
   uint32_t checkpoint_cap;
+  /**
+   * Always 0 (keeps `memory_limit` aligned without padding bytes).
+   */
+  uint32_t reserved;
+  /**
+   * Most heap bytes the system may hold (`plumage_system_memory`), 0
+   * (the default) for no limit. Create refuses with
+   * PLUMAGE_STATUS_LIMIT_EXCEEDED before its large allocations when the
+   * feathers' own arrays alone would pass it, and after building when the
+   * whole system does (everything it built is then freed); a step or
+   * evaluate that would leave the system above it is refused and undone
+   * (with a limit set, each step keeps a copy of the coat to undo with).
+   */
+  uint64_t memory_limit;
 } PlumageConfig;
 
 /**
@@ -766,6 +780,49 @@ typedef struct PlumageFrameStats {
    */
   uint64_t drape_descents;
 } PlumageFrameStats;
+
+/**
+ * The heap bytes a system holds, by part (`plumage_system_memory`). Fill
+ * with `plumage_memory_init` (or set `struct_size =
+ * sizeof(PlumageMemory)`) before the call.
+ */
+typedef struct PlumageMemory {
+  /**
+   * Set by the caller to `sizeof(PlumageMemory)`; the library writes back the bytes it filled.
+   */
+  uint32_t struct_size;
+  /**
+   * Always 0.
+   */
+  uint32_t reserved;
+  /**
+   * Every part below together.
+   */
+  uint64_t total;
+  /**
+   * The welded mesh, its connectivity and spatial index, the roots' rest
+   * binding and the current vertex positions.
+   */
+  uint64_t mesh;
+  /**
+   * The feathers at the current pose: frames, poses, triangles, records,
+   * and the previous frame's poses.
+   */
+  uint64_t coat;
+  /**
+   * The neighbourhoods and the priority order between neighbours.
+   */
+  uint64_t neighbourhoods;
+  /**
+   * Saved states kept for `plumage_system_seek` (checkpoints).
+   */
+  uint64_t history;
+  /**
+   * Working memory a step keeps between frames so as not to allocate
+   * again (grows with the feathers, never with the number of frames).
+   */
+  uint64_t scratch;
+} PlumageMemory;
 
 /**
  * Exact validation of the current feathers (`plumage_system_validate`).
@@ -1124,6 +1181,15 @@ void plumage_ordering_stats_init(struct PlumageOrderingStats *out);
 void plumage_frame_stats_init(struct PlumageFrameStats *out);
 
 /**
+ * Zeroes `out` and sets `struct_size` to `sizeof(PlumageMemory)`, ready for
+ * `plumage_system_memory`. NULL is ignored.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageMemory`.
+ */
+void plumage_memory_init(struct PlumageMemory *out);
+
+/**
  * Zeroes `out` and sets `struct_size` to `sizeof(PlumageValidation)`, ready for
  * `plumage_system_validate`. NULL is ignored.
  *
@@ -1320,6 +1386,20 @@ uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
  * bytes are writable.
  */
 uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct PlumageFrameStats *out);
+
+/**
+ * The heap bytes the system holds now, by part: what
+ * `PlumageConfig.memory_limit` is compared with. Counted from the
+ * capacities of the system's containers (the process's allocator adds its
+ * own bookkeeping on top).
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `out` is NULL
+ * or points to a struct whose `struct_size` is set and whose `struct_size`
+ * bytes are writable.
+ */
+uint32_t plumage_system_memory(const struct PlumageSystem *sys, struct PlumageMemory *out);
 
 /**
  * Runs the exact validation (triangle–triangle intersections, body

@@ -102,6 +102,8 @@ impl BodyIndex {
     }
 }
 
+crate::memory::heap_size_of_fields!(BodyIndex { grid, normals });
+
 #[cfg(test)]
 mod tests {
     use super::*;

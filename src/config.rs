@@ -161,6 +161,13 @@ pub struct Config {
     /// Most checkpoints kept besides the one after create (default 64, at
     /// least 1): past it, the oldest is dropped. Changes no result.
     pub checkpoint_cap: u32,
+    /// Most heap bytes the system may hold ([`System::memory`](crate::System::memory)),
+    /// 0 (the default) for no limit. Create refuses with `LimitExceeded`
+    /// before its large allocations when the feathers' own arrays alone
+    /// would pass it, and after building when the whole system does (then
+    /// everything it built is freed); a step or evaluate that would leave
+    /// the system above it is refused and undone. Changes no result.
+    pub memory_limit: usize,
 }
 
 /// What a system dresses a surface with: the defaults of [`Config`] for
@@ -222,6 +229,7 @@ impl Default for Config {
             settle_rate: DEFAULT_SETTLE_RATE,
             checkpoint_interval: 0,
             checkpoint_cap: 64,
+            memory_limit: 0,
         }
     }
 }

@@ -119,6 +119,13 @@ impl<T: Copy + Default> Csr<T> {
     }
 }
 
+impl<T: Copy> crate::memory::HeapSize for Csr<T> {
+    fn heap_bytes(&self) -> usize {
+        let Self { offsets, items, cursor } = self;
+        offsets.heap_bytes() + items.heap_bytes() + cursor.heap_bytes()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

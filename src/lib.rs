@@ -24,6 +24,7 @@ pub mod geometry;
 pub mod interior;
 pub mod intersect;
 pub mod limits;
+pub mod memory;
 pub mod mesh;
 pub mod ordering;
 pub mod pool;

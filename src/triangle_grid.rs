@@ -547,6 +547,8 @@ fn closest_point_f64(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     a + ab * v + ac * w
 }
 
+crate::memory::heap_size_of_fields!(TriangleGrid { corners, boxes, low_cells, cells, entries } plain { origin, cell, inv_cell, dims });
+
 #[cfg(test)]
 mod tests {
     use super::*;

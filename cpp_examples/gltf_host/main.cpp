@@ -117,6 +117,7 @@ PlumageConfig make_config(const Options& opt) {
     if (opt.bend_limit_deg) cfg.bend_limit = static_cast<float>(*opt.bend_limit_deg * kPi / 180.0);
     if (opt.fluffiness_deg) cfg.fluffiness = static_cast<float>(*opt.fluffiness_deg * kPi / 180.0);
     if (opt.threads) cfg.threads = *opt.threads;
+    if (opt.memory_limit_mib) cfg.memory_limit = *opt.memory_limit_mib << 20;
     return cfg;
 }
 
@@ -199,7 +200,7 @@ public:
         const Stopwatch create_clock;
         sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles(), maps_);
         report_.set_timing("create_seconds", create_clock.seconds());
-        report_.set_memory("after_create", memory_usage());
+        report_.set_memory("after_create", memory_usage(sys_.get()));
         check(plumage_system_feather_count(sys_.get(), &feather_count_), sys_.get(), "plumage_system_feather_count");
         report_.set_feathers(feather_count_);
         report_.set_sampling(sampling_stats(*sys_));
@@ -242,7 +243,7 @@ public:
             const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
             if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_mesh(*sys_));
             if (poses_) poses_->add_frame(pose);
-            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage());
+            report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage(sys_.get()));
             for (size_t p = 0; several() && p < parts_.size(); ++p) {
                 const MeshPart& part = parts_[p];
                 const bool check = validate_frame(opt_.validate, k, times_.size());

@@ -11,8 +11,11 @@
 
 namespace plumage_host {
 
-MemoryUsage memory_usage() {
+MemoryUsage memory_usage(const PlumageSystem* sys) {
     MemoryUsage m;
+    PlumageMemory held;
+    plumage_memory_init(&held);
+    if (sys && plumage_system_memory(sys, &held) == PLUMAGE_STATUS_OK) m.system = held;
     // Lines such as "VmRSS:	  123456 kB"; absent off Linux.
     std::ifstream status("/proc/self/status");
     std::string line;

@@ -6,6 +6,8 @@
 // under a malloc that does not fill mallinfo2 (AddressSanitizer's).
 #pragma once
 
+#include <plumage.h>
+
 #include <cstdint>
 #include <optional>
 
@@ -15,8 +17,10 @@ struct MemoryUsage {
     std::optional<uint64_t> rss_kib;       // resident now
     std::optional<uint64_t> peak_rss_kib;  // highest resident so far
     std::optional<uint64_t> heap_kib;      // live heap: in-use arena chunks plus mmapped blocks
+    std::optional<PlumageMemory> system;   // what the library's system holds (plumage_system_memory)
 };
 
-MemoryUsage memory_usage();
+// The process's figures, and with `sys` the system's own.
+MemoryUsage memory_usage(const PlumageSystem* sys = nullptr);
 
 }  // namespace plumage_host

@@ -99,7 +99,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--validate", "--out", "--report", "--poses",
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--memory-limit",  "--validate", "--out", "--report", "--poses",
                                            "--model-resolution", "--drift-tolerance", "--settle-rate", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
@@ -148,6 +148,8 @@ std::string usage_text() {
            "                       --flow, --flow-source or --flow-map the source is the front-most rest vertex\n"
            "                       (glTF models face +Z; the built-in model faces -X), so feathers run head to tail\n"
            "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
+           "  --memory-limit MIB   most heap the library's system may hold (default: no limit); create or a step\n"
+           "                       that would pass it is refused (LIMIT_EXCEEDED)\n"
            "  --drift-tolerance DEG   incremental: how far a feather may drift before it is readjusted (default 17.2;\n"
            "                       every moved feather is checked exactly each frame); at most 2.86 (theta_s) = the paper's rule\n"
            "  --settle-rate DEG    incremental: most a readjusted feather settles toward its solved pose in a frame\n"
@@ -230,6 +232,7 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--shaft-segments") o.shaft_segments = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
         else if (arg == "--bend-limit") o.bend_limit_deg = parse_float(arg, value);
         else if (arg == "--threads") o.threads = static_cast<uint32_t>(parse_unsigned(arg, value, UINT32_MAX));
+        else if (arg == "--memory-limit") o.memory_limit_mib = parse_unsigned(arg, value, UINT64_MAX >> 20);
         else if (arg == "--validate") {
             const uint32_t v = parse_choice(arg, value, {"every", "last", "none"}, {0u, 1u, 2u});
             o.validate = v == 0 ? ValidateWhen::Every : v == 1 ? ValidateWhen::Last : ValidateWhen::None;

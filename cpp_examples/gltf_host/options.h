@@ -45,6 +45,7 @@ struct Options {
     std::optional<float> bend_limit_deg;
     std::optional<float> fluffiness_deg;
     std::optional<uint32_t> threads;
+    std::optional<uint64_t> memory_limit_mib;
     // Per-vertex maps from vertex attributes (glTF input only).
     VertexMapSpec spacing_map;
     VertexMapSpec length_map;

@@ -52,6 +52,11 @@ void put_memory(json& j, const MemoryUsage& m) {
     if (m.rss_kib) j["rss_kib"] = *m.rss_kib;
     if (m.peak_rss_kib) j["peak_rss_kib"] = *m.peak_rss_kib;
     if (m.heap_kib) j["heap_kib"] = *m.heap_kib;
+    if (m.system) {
+        const PlumageMemory& s = *m.system;
+        j["system_bytes"] = {{"total", s.total},   {"mesh", s.mesh},       {"coat", s.coat}, {"neighbourhoods", s.neighbourhoods},
+                             {"history", s.history}, {"scratch", s.scratch}};
+    }
 }
 
 // Mean (how 0), max (how > 0) or min (how < 0) of `key` over the frames that have it.

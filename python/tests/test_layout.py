@@ -21,6 +21,7 @@ STRUCTS = {
     "PlumageSamplingStats": _ffi.SamplingStats,
     "PlumageOrderingStats": _ffi.OrderingStats,
     "PlumageFrameStats": _ffi.FrameStats,
+    "PlumageMemory": _ffi.Memory,
     "PlumageValidation": _ffi.Validation,
     "PlumageFeatherGeometry": _ffi.FeatherGeometry,
 }
@@ -45,6 +46,7 @@ def test_stats_structs_are_filled_whole(sphere) -> None:
         (_ffi.lib.plumage_system_sampling_stats, _ffi.SamplingStats),
         (_ffi.lib.plumage_system_ordering_stats, _ffi.OrderingStats),
         (_ffi.lib.plumage_system_validate, _ffi.Validation),
+        (_ffi.lib.plumage_system_memory, _ffi.Memory),
     ):
         raw = raw_type()
         raw.struct_size = ctypes.sizeof(raw_type)

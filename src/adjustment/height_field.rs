@@ -648,6 +648,11 @@ impl TrianglePlane {
     }
 }
 
+crate::memory::heap_size_of_fields!(HeightField {
+    obstacle, body, need, col_x, row_y, col_near, col_far, inv_near, inv_far, row_span, body_scratch, boxes,
+    sweep_obstacles, local_obstacles, swept, local_body
+} plain { u, v, dx, dy, y_min, floor, socket_x, body_floor, clearance_from, shape, need_for, first_col });
+
 #[cfg(test)]
 mod tests {
     use super::*;

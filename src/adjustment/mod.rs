@@ -23,7 +23,7 @@ mod checks;
 mod drape;
 mod height_field;
 mod levels;
-mod obstacle;
+pub(crate) mod obstacle;
 mod pitch_roll;
 mod settle;
 mod steps;

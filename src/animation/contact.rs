@@ -390,6 +390,8 @@ fn touch(shadows: &[Shadow], reach2: &[Reach2], i: u32, j: u32) -> u8 {
     u8::from(d2 <= r.touch) + u8::from(d2 <= r.near)
 }
 
+crate::memory::heap_size_of_fields!(Contacts { footprints, shadows, spheres, reach2, touch, offsets, indices, missed });
+
 #[cfg(test)]
 mod tests {
     use super::*;

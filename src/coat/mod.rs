@@ -192,3 +192,7 @@ impl Coat {
         }
     }
 }
+
+crate::memory::heap_size_of_fields!(Dressing { surface, triangles, source_triangle, feathered, roots, shapes, reach, face_part } plain {
+    neighbour_params, adjust_params, config, parts
+});

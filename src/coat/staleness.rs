@@ -282,6 +282,8 @@ fn invalid(message: &str) -> Error {
     Error::new(ErrorKind::InvalidState, message)
 }
 
+crate::memory::heap_size_of_fields!(Staleness { moved, summed, counts, placements });
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -150,7 +150,22 @@ pub struct PlumageConfig {
     /// Most checkpoints kept besides the one after create (default 64, at
     /// least 1); past it the oldest is dropped.
     pub checkpoint_cap: u32,
+    /// Always 0 (keeps `memory_limit` aligned without padding bytes).
+    pub reserved: u32,
+    /// Most heap bytes the system may hold (`plumage_system_memory`), 0
+    /// (the default) for no limit. Create refuses with
+    /// PLUMAGE_STATUS_LIMIT_EXCEEDED before its large allocations when the
+    /// feathers' own arrays alone would pass it, and after building when the
+    /// whole system does (everything it built is then freed); a step or
+    /// evaluate that would leave the system above it is refused and undone
+    /// (with a limit set, each step keeps a copy of the coat to undo with).
+    pub memory_limit: u64,
 }
+
+const _: () = assert!(
+    std::mem::offset_of!(PlumageConfig, memory_limit) == std::mem::offset_of!(PlumageConfig, checkpoint_cap) + 8
+        && std::mem::size_of::<PlumageConfig>() == std::mem::offset_of!(PlumageConfig, memory_limit) + 8
+);
 
 /// One task of a parallel section, handed to the host's parallel-for:
 /// call it once with each index in `0 .. count` and the `task_context` that
@@ -341,6 +356,8 @@ impl PlumageConfig {
             settle_rate: c.settle_rate,
             checkpoint_interval: c.checkpoint_interval,
             checkpoint_cap: c.checkpoint_cap,
+            reserved: 0,
+            memory_limit: c.memory_limit as u64,
         }
     }
 
@@ -419,6 +436,7 @@ impl PlumageConfig {
             settle_rate: self.settle_rate,
             checkpoint_interval: self.checkpoint_interval,
             checkpoint_cap: self.checkpoint_cap,
+            memory_limit: usize::try_from(self.memory_limit).unwrap_or(usize::MAX),
         };
         cfg.validate()?;
         Ok(cfg)

@@ -36,7 +36,7 @@ mod lifecycle;
 // Counts, feather records, triangles, the feathers as a mesh.
 mod feathers;
 
-// Sampling, ordering and frame figures.
+// Sampling, ordering, frame and memory figures.
 mod stats;
 
 // Validation, whole or per part; per-part figures.
@@ -181,6 +181,17 @@ pub unsafe extern "C" fn plumage_ordering_stats_init(out: *mut PlumageOrderingSt
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_frame_stats_init(out: *mut PlumageFrameStats) {
     // SAFETY: NULL or writable for one PlumageFrameStats (contract).
+    unsafe { write_sized(out, |s| &mut s.struct_size) }
+}
+
+/// Zeroes `out` and sets `struct_size` to `sizeof(PlumageMemory)`, ready for
+/// `plumage_system_memory`. NULL is ignored.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageMemory`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_memory_init(out: *mut PlumageMemory) {
+    // SAFETY: NULL or writable for one PlumageMemory (contract).
     unsafe { write_sized(out, |s| &mut s.struct_size) }
 }
 

@@ -239,3 +239,60 @@ pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, o
         })
     }
 }
+
+/// The heap bytes a system holds, by part (`plumage_system_memory`). Fill
+/// with `plumage_memory_init` (or set `struct_size =
+/// sizeof(PlumageMemory)`) before the call.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlumageMemory {
+    /// Set by the caller to `sizeof(PlumageMemory)`; the library writes back the bytes it filled.
+    pub struct_size: u32,
+    /// Always 0.
+    pub reserved: u32,
+    /// Every part below together.
+    pub total: u64,
+    /// The welded mesh, its connectivity and spatial index, the roots' rest
+    /// binding and the current vertex positions.
+    pub mesh: u64,
+    /// The feathers at the current pose: frames, poses, triangles, records,
+    /// and the previous frame's poses.
+    pub coat: u64,
+    /// The neighbourhoods and the priority order between neighbours.
+    pub neighbourhoods: u64,
+    /// Saved states kept for `plumage_system_seek` (checkpoints).
+    pub history: u64,
+    /// Working memory a step keeps between frames so as not to allocate
+    /// again (grows with the feathers, never with the number of frames).
+    pub scratch: u64,
+}
+
+/// The heap bytes the system holds now, by part: what
+/// `PlumageConfig.memory_limit` is compared with. Counted from the
+/// capacities of the system's containers (the process's allocator adds its
+/// own bookkeeping on top).
+///
+/// # Safety
+/// `sys` is NULL or a live handle from `plumage_system_create`; other threads
+/// may only make read-only (`const`) calls on it during the call. `out` is NULL
+/// or points to a struct whose `struct_size` is set and whose `struct_size`
+/// bytes are writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_system_memory(sys: *const PlumageSystem, out: *mut PlumageMemory) -> u32 {
+    // SAFETY: forwarded contract of this function.
+    unsafe {
+        figures_out(sys, out, std::mem::size_of::<PlumageMemory>(), "PlumageMemory", |system| {
+            let m = system.memory();
+            Ok(PlumageMemory {
+                struct_size: 0,
+                reserved: 0,
+                total: m.total() as u64,
+                mesh: m.mesh as u64,
+                coat: m.coat as u64,
+                neighbourhoods: m.neighbourhoods as u64,
+                history: m.history as u64,
+                scratch: m.scratch as u64,
+            })
+        })
+    }
+}

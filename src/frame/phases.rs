@@ -73,3 +73,5 @@ pub(super) fn neighbourhoods_and_body(coat: &mut Coat, dressing: &Dressing) -> f
 pub(super) fn body(coat: &mut Coat, dressing: &Dressing) {
     coat.body.rebuild(&coat.positions, &dressing.triangles);
 }
+
+crate::memory::heap_size_of_fields!(Workspace { adjuster, deltas, orientations });

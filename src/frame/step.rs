@@ -509,6 +509,26 @@ fn status_changes(old: &[u32], new: &[u32], mut changed: impl FnMut(usize, bool,
     false
 }
 
+crate::memory::heap_size_of_fields!(StepWorkspace {
+    previous_frames,
+    previous_ranks,
+    previous_offsets,
+    previous_indices,
+    maps,
+    displacement,
+    net,
+    orientations,
+    spheres,
+    seeds,
+    suspects,
+    no_suspects,
+    verified,
+    r_k,
+    body_ids,
+    contacts,
+    adjusted
+});
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -141,6 +141,8 @@ pub fn is_degenerate(a: Vec3, b: Vec3, c: Vec3) -> bool {
     !(twice_area > DEGENERATE_RELATIVE_HEIGHT * longest2)
 }
 
+crate::memory::heap_size_of_fields!(WeldedMesh { positions, triangles, source_triangle, caller_to_welded, representative } plain { degenerate_triangles, duplicate_triangles });
+
 #[cfg(test)]
 mod tests {
     use super::*;

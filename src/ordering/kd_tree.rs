@@ -209,6 +209,8 @@ fn precedes(a: (f32, u32), b: (f32, u32)) -> bool {
     a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
 }
 
+crate::memory::heap_size_of_fields!(KdTree { items, splits });
+
 #[cfg(test)]
 mod tests {
     use super::*;

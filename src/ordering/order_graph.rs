@@ -409,3 +409,9 @@ pub(super) fn check_pairs(pairs: &[(u32, u32)], n: usize) {
         }
     }
 }
+
+crate::memory::heap_size_of_fields!(PriorityOrder {
+    pairs, delta, state, inc, rank, order, suppressed, touched, blocking, path_pool, path_pool_spare, mark, parent,
+    stack, forward, backward, rank_pool, cycle, cycle_pairs, became_prior, gained_prior, moved, changed,
+    frame_changed, retry, next_pairs, next_delta, next_state, next_blocking, pair_map, fresh, sort_keys, waiting, heap
+} plain { edge_count, stamp });

@@ -346,6 +346,11 @@ fn build_vertex_neighbours(vertex_count: usize, edges: &[[u32; 2]]) -> Csr<u32> 
     neighbours
 }
 
+crate::memory::heap_size_of_fields!(Surface {
+    triangles, across, face_edges, edges, edge_face_start, edge_faces, vertex_neighbours,
+    rest_vertex_normals, rest_face_areas, rest_face_frames
+} plain { vertex_count, boundary_edges, non_manifold_edges });
+
 #[cfg(test)]
 mod tests {
     use super::*;

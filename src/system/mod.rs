@@ -9,6 +9,7 @@ use crate::error::Result;
 use crate::feather::{FeatherMesh, FeatherPose};
 use crate::field::Fields;
 use crate::frame::{StepWorkspace, Workspace};
+use crate::memory::MemoryUse;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
@@ -89,8 +90,12 @@ impl System {
             attribute(mesh.width_scale, 1).as_deref(),
             config,
         )?;
+        if config.spacing <= 0.0 {
+            check_feather_arrays(config, crate::sampling::target_feathers(config))?;
+        }
         progress.check(Phase::Sampling, 0.0)?;
         let mut planted = pool.install(|| plant_roots_with_progress(&welded, &surface, &fields, config, progress))?;
+        check_feather_arrays(config, planted.roots.len())?;
         progress.check(Phase::Sampling, 1.0)?;
         let mut dressing = Dressing::new(surface, &welded, std::mem::take(&mut planted.roots), config);
         if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
@@ -141,6 +146,10 @@ impl System {
         sampling.alignment = metrics.alignment;
         system.export();
         system.keep_checkpoint();
+        let held = system.memory().total();
+        if config.memory_limit > 0 && held > config.memory_limit {
+            return Err(crate::memory::over_limit("the system would hold", held, config.memory_limit));
+        }
         Ok(system)
     }
 
@@ -191,6 +200,63 @@ impl System {
     /// duplicate ones included).
     pub fn caller_triangle_count(&self) -> usize {
         self.mesh.triangles.len() + self.mesh.degenerate_triangles + self.mesh.duplicate_triangles
+    }
+
+    /// The heap bytes the system holds, by part (see [`MemoryUse`]). Every
+    /// field is named, so a new one must be given a part.
+    pub fn memory(&self) -> MemoryUse {
+        use crate::memory::HeapSize;
+        let Self {
+            pool: _,
+            mesh,
+            dressing,
+            sampling: _,
+            coat,
+            records,
+            triangles,
+            work,
+            step_work,
+            frame_positions,
+            previous_poses,
+            pose_changes: _,
+            checkpoints,
+            on_playback: _,
+            #[cfg(feature = "test-hooks")]
+                test_panic: _,
+        } = self;
+        let Coat {
+            positions,
+            normals,
+            frames,
+            poses,
+            neighbourhoods,
+            order,
+            body,
+            staleness,
+            settling,
+            frame_index: _,
+            ordering_report: _,
+            frame_report: _,
+        } = coat;
+        MemoryUse {
+            mesh: std::mem::size_of::<Self>()
+                + mesh.heap_bytes()
+                + dressing.heap_bytes()
+                + positions.heap_bytes()
+                + normals.heap_bytes()
+                + body.heap_bytes()
+                + frame_positions.heap_bytes(),
+            coat: frames.heap_bytes()
+                + poses.heap_bytes()
+                + staleness.heap_bytes()
+                + settling.heap_bytes()
+                + records.heap_bytes()
+                + triangles.heap_bytes()
+                + previous_poses.heap_bytes(),
+            neighbourhoods: neighbourhoods.heap_bytes() + order.heap_bytes(),
+            history: checkpoints.heap_bytes(),
+            scratch: work.heap_bytes() + step_work.heap_bytes(),
+        }
     }
 
     /// Number of feathers.
@@ -291,8 +357,16 @@ impl System {
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
         let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
-        let backup = progress.is_interruptible().then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
-        let result = update(self, progress);
+        let limit = self.dressing.config.memory_limit;
+        let backup = (progress.is_interruptible() || limit > 0)
+            .then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
+        let result = update(self, progress).and_then(|()| {
+            let held = self.memory().total();
+            if limit > 0 && held > limit {
+                return Err(crate::memory::over_limit("after this frame the system would hold", held, limit));
+            }
+            Ok(())
+        });
         match result {
             Ok(()) => {
                 self.pose_changes =
@@ -314,4 +388,18 @@ impl System {
         let Self { coat, dressing, records, triangles, .. } = self;
         coat.export(dressing, records, triangles);
     }
+}
+
+/// Refuses a create whose `feathers` feathers' own arrays would pass
+/// `config.memory_limit`, before they are allocated.
+fn check_feather_arrays(config: &Config, feathers: usize) -> Result<()> {
+    let floor = crate::memory::feather_arrays_floor(feathers);
+    if config.memory_limit > 0 && floor > config.memory_limit {
+        return Err(crate::memory::over_limit(
+            &format!("{feathers} feathers' own arrays alone would hold"),
+            floor,
+            config.memory_limit,
+        ));
+    }
+    Ok(())
 }

@@ -148,6 +148,7 @@ impl System {
             settle_rate,
             checkpoint_interval: _,
             checkpoint_cap: _,
+            memory_limit: _,
         } = &self.dressing.config;
         let bits = |x: f32| u64::from(x.to_bits());
         let mut words = vec![

@@ -446,6 +446,8 @@ fn side_of_skin(
     Some((p - nearest.point).dot(normal) < 0.0)
 }
 
+crate::memory::heap_size_of_fields!(BodyScratch { part, ids, distances });
+
 #[cfg(test)]
 mod tests {
     use super::*;

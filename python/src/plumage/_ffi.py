@@ -73,6 +73,8 @@ class Config(ctypes.Structure):
         ("settle_rate", c_float),
         ("checkpoint_interval", c_uint32),
         ("checkpoint_cap", c_uint32),
+        ("reserved", c_uint32),
+        ("memory_limit", c_uint64),
     ]
 
 
@@ -85,6 +87,7 @@ NON_KEYWORD_FIELDS = (
     "flow_source_enabled",
     "parallel_for",
     "parallel_for_context",
+    "reserved",
 )
 
 
@@ -141,6 +144,19 @@ class OrderingStats(ctypes.Structure):
         ("violations", c_uint32),
         ("reserved", c_uint32),
         ("seconds", ctypes.c_double),
+    ]
+
+
+class Memory(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("reserved", c_uint32),
+        ("total", c_uint64),
+        ("mesh", c_uint64),
+        ("coat", c_uint64),
+        ("neighbourhoods", c_uint64),
+        ("history", c_uint64),
+        ("scratch", c_uint64),
     ]
 
 
@@ -248,6 +264,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_system_sampling_stats": (c_uint32, [sys_p, POINTER(SamplingStats)]),
         "plumage_system_ordering_stats": (c_uint32, [sys_p, POINTER(OrderingStats)]),
         "plumage_system_frame_stats": (c_uint32, [sys_p, POINTER(FrameStats)]),
+        "plumage_system_memory": (c_uint32, [sys_p, POINTER(Memory)]),
         "plumage_system_validate": (c_uint32, [sys_p, POINTER(Validation)]),
         "plumage_system_save_state": (c_uint32, [sys_p, POINTER(c_uint8), c_size_t, size_p]),
         "plumage_system_load_state": (c_uint32, [sys_p, POINTER(c_uint8), c_size_t]),

@@ -139,6 +139,18 @@ class SamplingStats:
 
 
 @dataclass(frozen=True)
+class Memory:
+    """Heap bytes the system holds, by part (PlumageMemory)."""
+
+    total: int
+    mesh: int
+    coat: int
+    neighbourhoods: int
+    history: int
+    scratch: int
+
+
+@dataclass(frozen=True)
 class OrderingStats:
     pairs: int
     edges: int
@@ -487,6 +499,12 @@ class System:
     def ordering_stats(self) -> Optional[OrderingStats]:
         raw = self._stats(lib.plumage_system_ordering_stats, _ffi.OrderingStats, "plumage_system_ordering_stats")
         return None if raw is None else _from_struct(OrderingStats, raw)
+
+    def memory(self) -> Memory:
+        """Heap bytes the system holds now, by part: what `memory_limit` is compared with."""
+        raw = self._stats(lib.plumage_system_memory, _ffi.Memory, "plumage_system_memory")
+        assert raw is not None, "plumage_system_memory is always available"
+        return _from_struct(Memory, raw)
 
     def validate(self) -> Optional[Validation]:
         """Exact collision checks on the current feathers (None before feathers exist)."""

@@ -28,6 +28,12 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
 
+crate::memory::heap_size_of_fields!(Adjuster {
+    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, level_start, level_items,
+    cursor, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependent_offsets,
+    dependents
+} plain { settle_rate, #[cfg(test)] walk_share });
+
 #[cfg(test)]
 mod tests;
 mod visit;

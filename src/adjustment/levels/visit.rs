@@ -330,3 +330,10 @@ pub(super) fn check_clear(
         pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
     }
 }
+
+crate::memory::heap_size_of_fields!(Worker { field, obstacles, obstacle_ids });
+impl crate::memory::HeapSize for Vec<Worker> {
+    fn heap_bytes(&self) -> usize {
+        crate::memory::nested_heap_bytes(self)
+    }
+}

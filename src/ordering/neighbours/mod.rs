@@ -30,6 +30,11 @@
 mod params;
 mod rows;
 mod state;
+crate::memory::heap_size_of_fields!(Neighbourhoods {
+    tree, knn_offsets, knn_indices, pairs, obstacle_offsets, obstacle_indices, bucket_offsets, bucket_items,
+    fill_cursor, leaf_ids, leaf_starts, points, cells, nodes, chunks, #[cfg(test)] scratch_indices
+} plain { layout_generation, layout_roots, layout_spread, tree_current });
+
 #[cfg(test)]
 mod tests;
 

@@ -384,3 +384,19 @@ impl Cell {
         gap.length_squared() <= limit * limit
     }
 }
+
+crate::memory::heap_size_of_fields!(Chunk { roots, rows, row_lens, knn, knn_lens, near, union, d2, stack, best, deferred, cached } plain {
+    cache_generation, cache_leaves
+});
+crate::memory::heap_size_of_fields!(CachedLeaf { near, keys });
+crate::memory::heap_size_of_fields!(Union { x, y, z, reach, id });
+impl crate::memory::HeapSize for Vec<Chunk> {
+    fn heap_bytes(&self) -> usize {
+        crate::memory::nested_heap_bytes(self)
+    }
+}
+impl crate::memory::HeapSize for Vec<CachedLeaf> {
+    fn heap_bytes(&self) -> usize {
+        crate::memory::nested_heap_bytes(self)
+    }
+}
