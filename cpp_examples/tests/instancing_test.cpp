@@ -6,6 +6,7 @@
 // segments), and checks the changed list against full copies before and
 // after each step: a feather not listed is bit for bit as it was.
 #include "plumage.h"
+#include "plumage.hpp"
 
 #include "check.h"
 #include "sphere_mesh.h"
@@ -210,5 +211,17 @@ int main() {
                     segments, before.size(), nv, double(worst), 100.0 * double(listed) / double(steps * before.size()));
         plumage_system_destroy(sys);
     }
+    // The same through plumage.hpp.
+    PlumageConfig cfg = plumage::default_config();
+    cfg.target_feathers = 200;
+    cfg.threads = 1;
+    plumage::System sys(cfg, sphere.rest, sphere.tri);
+    std::vector<uint32_t> list;
+    CHECK(sys.changed_feathers(list) && list.size() == sys.feather_count());
+    CHECK(sys.feather_instances().size() == sys.feather_count());
+    const plumage::FeatherTemplate card = sys.feather_template();
+    CHECK(card.segments == cfg.shaft_segments && card.vertex_count() > 0 && card.triangle_count() > 0);
+    sys.step(wave(sphere.rest, 1));
+    CHECK(!sys.changed_feathers(list) && list.size() < sys.feather_count());
     return plumage_check::finish("instancing_test");
 }
