@@ -23,6 +23,8 @@ STRUCTS = {
     "PlumageFrameStats": _ffi.FrameStats,
     "PlumageValidation": _ffi.Validation,
     "PlumageFeatherGeometry": _ffi.FeatherGeometry,
+    "PlumageFeatherInstance": _ffi.FeatherInstance,
+    "PlumageFeatherTemplate": _ffi.FeatherTemplate,
 }
 
 
