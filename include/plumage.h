@@ -264,6 +264,13 @@
 #define PLUMAGE_DEFAULT_BEND_LIMIT 0.4
 
 /**
+ * The bend that a `PlumageFeatherInstance.bends` value of 32767 stands
+ * for, radians (π as a float): a joint's bend is `bends[k] *
+ * PLUMAGE_INSTANCE_BEND_RANGE / 32767`.
+ */
+#define PLUMAGE_INSTANCE_BEND_RANGE 3.1415927
+
+/**
  * Triangle tests allowed per body triangle and per root aimed at (see
  * [`WorkBudget`]): the shared test models take at most about 1 000.
  */
@@ -806,7 +813,8 @@ typedef struct PlumageMemory {
   uint64_t mesh;
   /**
    * The feathers at the current pose: frames, poses, triangles, records,
-   * and the previous frame's poses.
+   * the previous frame's poses and root frames, and the list of feathers
+   * the last call changed.
    */
   uint64_t coat;
   /**
@@ -1103,6 +1111,137 @@ typedef struct PlumageFeatherGeometry {
   size_t placed_capacity;
 } PlumageFeatherGeometry;
 
+/**
+ * One feather packed for instancing (36 bytes, no padding), copied out by
+ * `plumage_system_feather_instances`.
+ *
+ * Convention. The root frame has x along the feather's tangential
+ * direction (the shaft before pitch), y along the binormal (the "left"
+ * vane's side, normal × shaft), z along the surface normal; x × y = z.
+ * The feather's own frame is the root frame turned by the roll about x
+ * (right-hand rule: a positive roll lifts the +y vane off the skin), then
+ * by the pitch about y, tip towards +z (a positive pitch lifts the tip).
+ * `rotation` turns the own frame into world space.
+ *
+ * The shaft runs from the root along the own frame's +x and is cut into
+ * S equal segments (`PlumageFeatherTemplate.segments`). Segment k points
+ * along (cos a_k, 0, sin a_k), with a_0 = 0 and a_k = a_(k-1) + bend_k:
+ * a positive bend turns the rest of the shaft towards +z (off the skin),
+ * a negative one towards the skin. A template vertex (x, y, 0) carried by
+ * segment k (`PlumageFeatherTemplate.vertex_segments`) lands at
+ *
+ *     p = sum over j < k of (L/S)(cos a_j, 0, sin a_j)
+ *         + (x - k/S) L (cos a_k, 0, sin a_k) + (0, y W, 0)
+ *     world = root + rotate(q, p)
+ *
+ * with L = `length`, W = `width`; `shaders/feather_instance.vert` does
+ * this on the GPU. The result matches `plumage_system_feather_geometry`'s
+ * positions within 1e-4 of the feather's length.
+ */
+typedef struct PlumageFeatherInstance {
+  /**
+   * Root position, world space.
+   */
+  float root[3];
+  /**
+   * The own frame's rotation to world as a unit quaternion (x, y, z, w),
+   * each component `value / 32767`, w >= 0; normalise after decoding.
+   */
+  int16_t rotation[4];
+  /**
+   * Length along the shaft as placed (0 for a feather left out: every
+   * vertex at the root; see `PlumageFeather.length`).
+   */
+  float length;
+  /**
+   * Width across the vanes as placed.
+   */
+  float width;
+  /**
+   * Bend of each joint from the root, `value * PLUMAGE_INSTANCE_BEND_RANGE
+   * / 32767` radians; joints past S - 1 are 0.
+   */
+  int16_t bends[3];
+  /**
+   * Always 0 (keeps the struct free of padding bytes).
+   */
+  uint16_t reserved;
+} PlumageFeatherInstance;
+
+/**
+ * Caller buffers for `plumage_system_feather_template`: the card every
+ * feather of the system is drawn from. Fill with
+ * `plumage_feather_template_init`, point the buffers you want at your
+ * memory (NULL skips one); capacities count elements. The library writes
+ * the counts back.
+ */
+typedef struct PlumageFeatherTemplate {
+  /**
+   * Set by `plumage_feather_template_init` to `sizeof(PlumageFeatherTemplate)`.
+   */
+  uint32_t struct_size;
+  /**
+   * Out: shaft segments S of every feather of the system.
+   */
+  uint32_t segments;
+  /**
+   * Out: vertices of the card (those of one feather in
+   * `plumage_system_feather_geometry`, in the same order).
+   */
+  uint32_t vertex_count;
+  /**
+   * Out: triangles of the card (one feather's, in the same order).
+   */
+  uint32_t triangle_count;
+  /**
+   * Out: where the vane corners sit along the shaft, as a fraction of
+   * the length.
+   */
+  float vane_split;
+  /**
+   * Padding; always 0.
+   */
+  uint32_t reserved;
+  /**
+   * xyz per vertex in the feather's own frame for unit length and width:
+   * x from 0 at the root to 1 at the tip along the unbent shaft, y
+   * across (+-0.5 at the vane corners, + on the binormal side), z 0
+   * (3 × vertex_count floats).
+   */
+  float *positions;
+  /**
+   * Capacity of `positions`, in floats.
+   */
+  size_t positions_capacity;
+  /**
+   * (u, v) per vertex, as in `PlumageFeatherGeometry.uvs` (u = x,
+   * v = 0.5 + y) (2 × vertex_count floats).
+   */
+  float *uvs;
+  /**
+   * Capacity of `uvs`, in floats.
+   */
+  size_t uvs_capacity;
+  /**
+   * Three vertex indices per triangle, facing away from the skin
+   * (3 × triangle_count).
+   */
+  uint32_t *indices;
+  /**
+   * Capacity of `indices`, in indices.
+   */
+  size_t indices_capacity;
+  /**
+   * Per vertex: the shaft segment k (0 at the root) that carries it: the
+   * vertex sits (x - k/S) of the length along segment k (vertex_count).
+   */
+  uint32_t *vertex_segments;
+  /**
+   * Capacity of `vertex_segments`.
+   */
+  size_t vertex_segments_capacity;
+} PlumageFeatherTemplate;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -1349,6 +1488,82 @@ void plumage_feather_geometry_init(struct PlumageFeatherGeometry *geometry);
  */
 uint32_t plumage_system_feather_geometry(const struct PlumageSystem *sys,
                                          struct PlumageFeatherGeometry *geometry);
+
+/**
+ * Copies one `PlumageFeatherInstance` per feather into `buf` (`capacity`
+ * elements), in the order of `plumage_system_feathers`. `*out_len`
+ * receives the feather count; a NULL or too small `buf` gives
+ * PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `buf` is NULL
+ * or holds `capacity` writable elements; `out_len` is NULL or points to a
+ * writable `size_t`.
+ */
+uint32_t plumage_system_feather_instances(const struct PlumageSystem *sys,
+                                          struct PlumageFeatherInstance *buf,
+                                          size_t capacity,
+                                          size_t *out_len);
+
+/**
+ * Fills `card` with NULL buffers, zero capacities and counts, and sets
+ * `struct_size`. NULL is ignored.
+ *
+ * # Safety
+ * `card` is NULL or points to writable memory for one `PlumageFeatherTemplate`.
+ */
+void plumage_feather_template_init(struct PlumageFeatherTemplate *card);
+
+/**
+ * Copies out the template card of the system's feathers: vertices in the
+ * feather's own frame for unit length and width, UVs, triangles and the
+ * shaft segment of each vertex (see `PlumageFeatherTemplate`, and
+ * `PlumageFeatherInstance` for how a record places it). It never changes
+ * after create. The counts are always written back; if a non-NULL buffer
+ * is too small the call returns PLUMAGE_STATUS_BUFFER_TOO_SMALL (naming
+ * it) and writes no buffer.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `card`
+ * is NULL or points to a `PlumageFeatherTemplate` whose `struct_size` bytes
+ * are readable and writable and whose non-NULL buffers hold their stated
+ * capacities of writable elements.
+ */
+uint32_t plumage_system_feather_template(const struct PlumageSystem *sys,
+                                         struct PlumageFeatherTemplate *card);
+
+/**
+ * Copies the indices of the feathers whose record (and triangles) the
+ * last create, step, evaluate, load or seek may have changed, increasing,
+ * into `indices` (`capacity` elements); `*out_len` receives their count.
+ * Every feather not listed is, bit for bit, as the call before left it:
+ * its `PlumageFeatherInstance`, its triangles and vertices in
+ * `plumage_system_feather_triangles` and `plumage_system_feather_geometry`,
+ * and every field of its `PlumageFeather` but `order_index` (the order may
+ * change around a feather that stays put). So an engine re-uploads only
+ * the listed records. A step or
+ * an evaluate lists the feathers whose root moved or turned (the skin
+ * under it moved) or whose pose changed; after a create, a load, or a
+ * seek that loaded a checkpoint, every feather is listed and `*out_all`
+ * is 1 (otherwise 0). A refused or interrupted call leaves the list as it
+ * was. `out_all` may be NULL; it is written only when the call returns
+ * PLUMAGE_STATUS_OK. A NULL or too small `indices` (with a non-empty
+ * list) gives PLUMAGE_STATUS_BUFFER_TOO_SMALL and writes nothing else.
+ *
+ * # Safety
+ * `sys` is NULL or a live handle from `plumage_system_create`; other threads
+ * may only make read-only (`const`) calls on it during the call. `indices`
+ * is NULL or holds `capacity` writable elements; `out_len` is NULL or
+ * points to a writable `size_t`; `out_all` is NULL or points to a writable
+ * `uint32_t`.
+ */
+uint32_t plumage_system_changed_feathers(const struct PlumageSystem *sys,
+                                         uint32_t *indices,
+                                         size_t capacity,
+                                         size_t *out_len,
+                                         uint32_t *out_all);
 
 /**
  * Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when

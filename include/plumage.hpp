@@ -134,6 +134,21 @@ struct FeatherGeometry {
     size_t triangle_count() const noexcept { return indices.size() / 3; }
 };
 
+/// The template card every feather is instanced from
+/// (plumage_system_feather_template); see PlumageFeatherTemplate, and
+/// PlumageFeatherInstance for how a record places it.
+struct FeatherTemplate {
+    uint32_t segments = 0;                  ///< shaft segments S
+    float vane_split = 0.0f;                ///< where the vane corners sit (fraction of the length)
+    std::vector<float> positions;           ///< xyz per vertex, own frame, unit length and width
+    std::vector<float> uvs;                 ///< (u, v) per vertex
+    std::vector<uint32_t> indices;          ///< three per triangle
+    std::vector<uint32_t> vertex_segments;  ///< per vertex: the shaft segment that carries it
+
+    size_t vertex_count() const noexcept { return vertex_segments.size(); }
+    size_t triangle_count() const noexcept { return indices.size() / 3; }
+};
+
 /// An owned feathering system: created in the constructor, destroyed with
 /// the object. Move-only; a moved-from System holds nothing and only its
 /// destructor, assignment and get() may be used.
@@ -254,6 +269,53 @@ public:
         FeatherGeometry out;
         feather_geometry(out);
         return out;
+    }
+
+    /// plumage_system_feather_instances: one 36-byte record per feather.
+    void feather_instances(std::vector<PlumageFeatherInstance>& out) const {
+        detail::copy_out(sys_, out, [this](PlumageFeatherInstance* buf, size_t cap, size_t* len) {
+            return plumage_system_feather_instances(sys_, buf, cap, len);
+        });
+    }
+    std::vector<PlumageFeatherInstance> feather_instances() const {
+        std::vector<PlumageFeatherInstance> out;
+        feather_instances(out);
+        return out;
+    }
+
+    /// plumage_system_feather_template: the card, every buffer.
+    FeatherTemplate feather_template() const {
+        PlumageFeatherTemplate t;
+        plumage_feather_template_init(&t);
+        detail::check(plumage_system_feather_template(sys_, &t), sys_);
+        FeatherTemplate out;
+        out.segments = t.segments;
+        out.vane_split = t.vane_split;
+        out.positions.resize(3 * size_t(t.vertex_count));
+        out.uvs.resize(2 * size_t(t.vertex_count));
+        out.indices.resize(3 * size_t(t.triangle_count));
+        out.vertex_segments.resize(t.vertex_count);
+        t.positions = out.positions.data();
+        t.positions_capacity = out.positions.size();
+        t.uvs = out.uvs.data();
+        t.uvs_capacity = out.uvs.size();
+        t.indices = out.indices.data();
+        t.indices_capacity = out.indices.size();
+        t.vertex_segments = out.vertex_segments.data();
+        t.vertex_segments_capacity = out.vertex_segments.size();
+        detail::check(plumage_system_feather_template(sys_, &t), sys_);
+        return out;
+    }
+
+    /// plumage_system_changed_feathers: fills `out` with the indices of the
+    /// feathers the last call may have changed; returns true when that is
+    /// every feather (after create, a load or a seek that loaded).
+    bool changed_feathers(std::vector<uint32_t>& out) const {
+        uint32_t all = 0;
+        detail::copy_out(sys_, out, [this, &all](uint32_t* buf, size_t cap, size_t* len) {
+            return plumage_system_changed_feathers(sys_, buf, cap, len, &all);
+        });
+        return all != 0;
     }
 
     PlumageSamplingStats sampling_stats() const {

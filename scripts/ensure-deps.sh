@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Makes sure the build tools are present: cargo (must already be installed),
-# cmake, g++, pkg-config and Debian's libtinygltf-dev (and clang when it can). Installs the missing
+# cmake, g++, pkg-config, Debian's libtinygltf-dev and glslang-tools (and
+# clang when it can). Installs the missing
 # Debian packages when run as root with apt-get; otherwise stops and prints
 # the exact command to run.
 set -euo pipefail
@@ -17,6 +18,8 @@ command -v g++ >/dev/null 2>&1 || missing+=(g++)
 command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
 [ -f /usr/include/tiny_gltf.h ] || missing+=(libtinygltf-dev)
 [ -f /usr/include/nlohmann/json.hpp ] || missing+=(nlohmann-json3-dev)
+# glslangValidator compiles the reference shader (ctest shader_compiles).
+command -v glslangValidator >/dev/null 2>&1 || missing+=(glslang-tools)
 # The Python package's tests run in a venv (scripts/test.sh).
 command -v python3 >/dev/null 2>&1 || missing+=(python3)
 if command -v python3 >/dev/null 2>&1; then

@@ -98,7 +98,8 @@ pub struct MemoryUse {
     /// the roots' rest binding and the current vertex positions.
     pub mesh: usize,
     /// The feathers' frames, poses, triangles and records at the current
-    /// pose, and the previous frame's poses.
+    /// pose, the previous frame's poses and root frames, and the list of
+    /// feathers the last call changed.
     pub coat: usize,
     /// The neighbourhoods (k-nearest and obstacle rows, their tree) and the
     /// priority order between neighbours.

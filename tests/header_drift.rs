@@ -50,6 +50,11 @@ fn header_declares_the_contract() {
         "uint32_t plumage_system_load_state(PlumageSystem *sys, const uint8_t *blob, size_t len)",
         "uint32_t plumage_system_validate(const PlumageSystem *sys, PlumageValidation *out)",
         "uint32_t plumage_system_frame_stats(const PlumageSystem *sys, PlumageFrameStats *out)",
+        "uint32_t plumage_system_feather_instances(const PlumageSystem *sys, PlumageFeatherInstance *buf, size_t capacity, size_t *out_len)",
+        "void plumage_feather_template_init(PlumageFeatherTemplate *card)",
+        "uint32_t plumage_system_feather_template(const PlumageSystem *sys, PlumageFeatherTemplate *card)",
+        "uint32_t plumage_system_changed_feathers(const PlumageSystem *sys, uint32_t *indices, size_t capacity, size_t *out_len, uint32_t *out_all)",
+        "#define PLUMAGE_INSTANCE_BEND_RANGE",
         "#define PLUMAGE_H",
         "Thread safety",
     ] {

@@ -24,6 +24,8 @@ STRUCTS = {
     "PlumageMemory": _ffi.Memory,
     "PlumageValidation": _ffi.Validation,
     "PlumageFeatherGeometry": _ffi.FeatherGeometry,
+    "PlumageFeatherInstance": _ffi.FeatherInstance,
+    "PlumageFeatherTemplate": _ffi.FeatherTemplate,
 }
 
 

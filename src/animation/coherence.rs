@@ -38,6 +38,7 @@
 //! 1.05°, 5° up to 0.40° (0.04 % pops either way).
 
 use crate::feather::{FeatherPose, pose_change};
+use crate::geometry::RootFrame;
 
 /// The pose changes of one frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -57,6 +58,39 @@ pub fn pose_changes(before: &[FeatherPose], after: &[FeatherPose], threshold: f3
     })
 }
 
+/// The feathers whose placement differs in any bit between two frames of
+/// the same feathers: root frame (position, normal, tangent, binormal) or
+/// pose (pitch, roll, size, bends). Their indices, increasing, replace
+/// `changed`; returns how many of them changed their pose (the rest only
+/// moved with the skin). A feather not listed has the same record and the
+/// same triangles, bit for bit, since both are functions of these alone
+/// (its shape never changes).
+pub fn changed_feathers(
+    before: (&[RootFrame], &[FeatherPose]),
+    after: (&[RootFrame], &[FeatherPose]),
+    changed: &mut Vec<u32>,
+) -> usize {
+    changed.clear();
+    let mut reposed = 0;
+    for (i, ((fb, pb), (fa, pa))) in before.0.iter().zip(before.1).zip(after.0.iter().zip(after.1)).enumerate() {
+        let pose_moved = pose_bits(pb) != pose_bits(pa);
+        if pose_moved || frame_bits(fb) != frame_bits(fa) {
+            changed.push(i as u32);
+            reposed += usize::from(pose_moved);
+        }
+    }
+    reposed
+}
+
+fn frame_bits(f: &RootFrame) -> [u32; 12] {
+    let [p, n, t, b] = [f.position, f.normal, f.tangent, f.binormal].map(|v| v.to_array().map(f32::to_bits));
+    [p[0], p[1], p[2], n[0], n[1], n[2], t[0], t[1], t[2], b[0], b[1], b[2]]
+}
+
+fn pose_bits(p: &FeatherPose) -> ([u32; 3], [u32; crate::feather::MAX_JOINTS]) {
+    ([p.pitch, p.roll, p.scale].map(f32::to_bits), p.bends.map(f32::to_bits))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,6 +108,21 @@ mod tests {
         assert_eq!(c.pops, 2);
         assert!((c.largest - 0.3).abs() < 1e-6);
         assert_eq!(pose_changes(&before, &before, DEFAULT_POP_THRESHOLD), PoseChanges::default());
+    }
+
+    #[test]
+    fn changed_feathers_are_those_that_differ_in_any_bit() {
+        let frame = RootFrame::from_normal_and_direction(glam::Vec3::ONE, glam::Vec3::Z, glam::Vec3::X).unwrap();
+        let (frames, poses) = (vec![frame; 6], vec![FeatherPose::new(0.2, 0.0); 6]);
+        let (mut moved, mut posed) = (frames.clone(), poses.clone());
+        moved[1].position.x = f32::from_bits(moved[1].position.x.to_bits() + 1); // one ulp
+        posed[3].bends[2] = -0.0; // 0.0 before: equal as floats, not as bits
+        posed[4].scale = 0.5;
+        moved[4].normal.y = -0.0;
+        let mut changed = vec![99];
+        let reposed = changed_feathers((&frames, &poses), (&moved, &posed), &mut changed);
+        assert_eq!((changed, reposed), (vec![1, 3, 4], 2));
+        assert_eq!(changed_feathers((&frames, &poses), (&frames, &poses), &mut vec![]), 0);
     }
 
     #[test]

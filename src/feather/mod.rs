@@ -1,6 +1,7 @@
 //! The feather as geometry, in one place (DESIGN.md §4): its shape, its pose
 //! and the posed feather (triangles, shaft, normal, tip), and the mesh a
-//! host copies out (vertices, triangles, UVs, normals).
+//! host copies out (vertices, triangles, UVs, normals), and the packed
+//! record and template card a renderer instances it from (`record`).
 //!
 //! Local coordinates follow [`RootFrame`](crate::geometry::RootFrame): x
 //! along the tangential orientation `õ`, y along the binormal `b`, z along
@@ -10,6 +11,7 @@
 
 mod mesh;
 mod pose;
+mod record;
 mod shape;
 
 pub use mesh::{FeatherMesh, FeatherMeshLayout};
@@ -17,5 +19,6 @@ pub use pose::{
     FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, pose_change, segment_triangles,
     shaft_direction, tip_position, toward, triangles_per_feather,
 };
+pub use record::{FeatherTemplate, InstanceRecord, RECORD_BEND_RANGE};
 pub use shape::{FeatherShape, MAX_JOINTS, MAX_SEGMENTS, MAX_STATIONS, ShaftPlan};
 pub(crate) use shape::{LENGTH_PER_SPACING, WIDTH_PER_SPACING};

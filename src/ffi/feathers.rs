@@ -291,7 +291,8 @@ pub unsafe extern "C" fn plumage_system_feather_geometry(
         // SAFETY: as above; only the totals change.
         unsafe { write_versioned(geometry, size, io, "PlumageFeatherGeometry") }?;
         let flat = |v: &[[f32; 3]]| v.as_flattened().to_vec();
-        let buffers = GeometryBuffers {
+        let buffers = CallerBuffers {
+            name: "PlumageFeatherGeometry",
             floats: [
                 ("positions", io.positions, io.positions_capacity, flat(&mesh.positions)),
                 ("normals", io.normals, io.normals_capacity, flat(&mesh.normals)),
@@ -312,17 +313,24 @@ pub unsafe extern "C" fn plumage_system_feather_geometry(
     })
 }
 
-/// The buffers of one `plumage_system_feather_geometry` call with what
-/// goes into each: (name, caller pointer, capacity, contents).
-struct GeometryBuffers {
-    floats: [(&'static str, *mut f32, usize, Vec<f32>); 3],
-    indices: [(&'static str, *mut u32, usize, Vec<u32>); 4],
-    bytes: [(&'static str, *mut u8, usize, Vec<u8>); 1],
+/// One caller buffer of a struct of buffers: (field name, caller pointer,
+/// capacity, contents).
+pub(super) type CallerBuffer<T> = (&'static str, *mut T, usize, Vec<T>);
+
+/// The buffers of one call that fills a struct of caller buffers
+/// (`PlumageFeatherGeometry`, `PlumageFeatherTemplate`) with what goes
+/// into each.
+pub(super) struct CallerBuffers<const F: usize, const I: usize, const B: usize> {
+    /// The C struct's name, for messages.
+    pub name: &'static str,
+    pub floats: [CallerBuffer<f32>; F],
+    pub indices: [CallerBuffer<u32>; I],
+    pub bytes: [CallerBuffer<u8>; B],
 }
 
-impl GeometryBuffers {
+impl<const F: usize, const I: usize, const B: usize> CallerBuffers<F, I, B> {
     /// Refuses the call when a given buffer is too small for its contents.
-    fn check(&self) -> Result<(), Failure> {
+    pub fn check(&self) -> Result<(), Failure> {
         let sizes = self.floats.iter().map(|(n, p, c, v)| (*n, p.is_null(), *c, v.len()));
         let sizes = sizes
             .chain(self.indices.iter().map(|(n, p, c, v)| (*n, p.is_null(), *c, v.len())))
@@ -331,7 +339,7 @@ impl GeometryBuffers {
             if !null && capacity < needed {
                 return Err(Failure::new(
                     PLUMAGE_STATUS_BUFFER_TOO_SMALL,
-                    format!("PlumageFeatherGeometry.{name} holds {capacity} elements but {needed} are needed"),
+                    format!("{}.{name} holds {capacity} elements but {needed} are needed", self.name),
                 ));
             }
         }
@@ -342,7 +350,7 @@ impl GeometryBuffers {
     ///
     /// # Safety
     /// Every non-NULL pointer holds at least as many elements as its contents.
-    unsafe fn write(&self) {
+    pub unsafe fn write(&self) {
         fn put<T: Copy>(ptr: *mut T, items: &[T]) {
             if !ptr.is_null() {
                 // SAFETY: the caller's buffer holds items.len() elements (checked).

@@ -7,9 +7,10 @@
 //! refusals, copy-out, `struct_size` versioning), the panic boundary and the
 //! handle (`boundary`), the config and the mesh a host passes in (`config`,
 //! `mesh`), create, destroy, step and evaluate (`lifecycle`), the feathers
-//! read back (`feathers`), figures (`stats`), validation and per-part
-//! figures (`validation`), saved state and scrubbing (`state`), and the last
-//! error (`errors`).
+//! read back (`feathers`), the feathers for instancing (`instancing`:
+//! packed records, the template card, what changed), figures (`stats`),
+//! validation and per-part figures (`validation`), saved state and
+//! scrubbing (`state`), and the last error (`errors`).
 
 // The modules in the order of their declarations in `include/plumage.h`
 // (cbindgen keeps the source order; a blank line between each keeps rustfmt
@@ -36,6 +37,9 @@ mod lifecycle;
 // Counts, feather records, triangles, the feathers as a mesh.
 mod feathers;
 
+// Instancing: packed records, the template card, what changed.
+mod instancing;
+
 // Sampling, ordering, frame and memory figures.
 mod stats;
 
@@ -52,6 +56,7 @@ pub use boundary::PlumageSystem;
 pub use config::*;
 pub use errors::*;
 pub use feathers::*;
+pub use instancing::*;
 pub use lifecycle::*;
 pub use mesh::PlumageMeshDesc;
 pub use state::*;

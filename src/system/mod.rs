@@ -2,13 +2,14 @@
 //! feathers' rest binding (the dressing) and their state at the current pose
 //! (the coat), and is what the FFI handle wraps.
 
-use crate::animation::coherence::{PoseChanges, pose_changes};
+use crate::animation::coherence::{PoseChanges, changed_feathers, pose_changes};
 use crate::coat::{Coat, Dressing};
 use crate::config::Config;
 use crate::error::Result;
-use crate::feather::{FeatherMesh, FeatherPose};
+use crate::feather::{FeatherMesh, FeatherPose, FeatherTemplate, InstanceRecord};
 use crate::field::Fields;
 use crate::frame::{StepWorkspace, Workspace};
+use crate::geometry::RootFrame;
 use crate::memory::MemoryUse;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
 use crate::pool::WorkerPool;
@@ -38,6 +39,15 @@ pub struct System {
     /// The poses before the last step or evaluate, and how they changed.
     previous_poses: Vec<FeatherPose>,
     pose_changes: PoseChanges,
+    /// The root frames before the last step or evaluate.
+    previous_frames: Vec<RootFrame>,
+    /// The feathers whose placement the last call changed (see
+    /// [`System::changed_feathers`]), how many of them changed their pose,
+    /// and whether the list holds every feather because the previous
+    /// result is not comparable.
+    changed: Vec<u32>,
+    reposed: usize,
+    all_changed: bool,
     /// State blobs by frame count (see [`System::seek`]).
     checkpoints: BTreeMap<u64, Vec<u8>>,
     /// Whether the coat is what stepping from create gives (no evaluate or
@@ -123,6 +133,10 @@ impl System {
             frame_positions: Vec::new(),
             previous_poses: Vec::new(),
             pose_changes: PoseChanges::default(),
+            previous_frames: Vec::new(),
+            changed: Vec::new(),
+            reposed: 0,
+            all_changed: true,
             checkpoints: BTreeMap::new(),
             on_playback: true,
             #[cfg(feature = "test-hooks")]
@@ -145,6 +159,7 @@ impl System {
         sampling.coverage_gap = metrics.coverage_gap;
         sampling.alignment = metrics.alignment;
         system.export();
+        system.all_changed_now();
         system.keep_checkpoint();
         let held = system.memory().total();
         if config.memory_limit > 0 && held > config.memory_limit {
@@ -218,6 +233,10 @@ impl System {
             step_work,
             frame_positions,
             previous_poses,
+            previous_frames,
+            changed,
+            reposed: _,
+            all_changed: _,
             pose_changes: _,
             checkpoints,
             on_playback: _,
@@ -252,7 +271,9 @@ impl System {
                 + settling.heap_bytes()
                 + records.heap_bytes()
                 + triangles.heap_bytes()
-                + previous_poses.heap_bytes(),
+                + previous_poses.heap_bytes()
+                + previous_frames.heap_bytes()
+                + changed.heap_bytes(),
             neighbourhoods: neighbourhoods.heap_bytes() + order.heap_bytes(),
             history: checkpoints.heap_bytes(),
             scratch: work.heap_bytes() + step_work.heap_bytes(),
@@ -309,6 +330,43 @@ impl System {
         self.pose_changes
     }
 
+    /// Each feather packed for instancing, in the order of
+    /// [`System::feathers`] (see [`InstanceRecord`] for the convention):
+    /// placed from [`System::feather_template`] they give the vertices of
+    /// [`System::feather_mesh`] within 1e-4 of a feather's length.
+    pub fn feather_instances(&self) -> Vec<InstanceRecord> {
+        let placements = self.coat.frames.iter().zip(&self.dressing.shapes).zip(&self.coat.poses);
+        placements.map(|((frame, shape), pose)| InstanceRecord::pack(frame, shape, pose)).collect()
+    }
+
+    /// The template card of the system's feathers (every feather has the
+    /// same segments and vane split; only length and width differ).
+    pub fn feather_template(&self) -> FeatherTemplate {
+        let shape = self.dressing.shapes.first().copied().unwrap_or_else(|| {
+            crate::feather::FeatherShape::for_spacing(1.0).with_segments(self.dressing.config.shaft_segments)
+        });
+        FeatherTemplate::of(&shape)
+    }
+
+    /// The feathers whose record and triangles the last create, step,
+    /// evaluate, load or seek may have changed: every feather not listed
+    /// is, bit for bit, as the call before left it. A step or an evaluate
+    /// lists the feathers whose root frame or pose differs in any bit; a
+    /// create, a load and a seek that loads a checkpoint list every feather
+    /// with `all` set (there is no previous result to compare with). A
+    /// refused or interrupted call leaves the list as it was.
+    pub fn changed_feathers(&self) -> ChangedFeathers<'_> {
+        ChangedFeathers { indices: &self.changed, reposed: self.reposed, all: self.all_changed }
+    }
+
+    /// Marks every feather changed (after create or a load).
+    fn all_changed_now(&mut self) {
+        self.changed.clear();
+        self.changed.extend(0..self.coat.poses.len() as u32);
+        self.reposed = self.changed.len();
+        self.all_changed = true;
+    }
+
     /// Advances to the next animation frame by the system's mode. On error
     /// nothing changes.
     pub fn step(&mut self, positions: &[f32]) -> Result<()> {
@@ -357,6 +415,7 @@ impl System {
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
         let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
+        self.previous_frames.clone_from(&self.coat.frames);
         let limit = self.dressing.config.memory_limit;
         let backup = (progress.is_interruptible() || limit > 0)
             .then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
@@ -371,6 +430,12 @@ impl System {
             Ok(()) => {
                 self.pose_changes =
                     pose_changes(&self.previous_poses, &self.coat.poses, self.dressing.config.pop_threshold);
+                let (before, after) = (
+                    (&self.previous_frames[..], &self.previous_poses[..]),
+                    (&self.coat.frames[..], &self.coat.poses[..]),
+                );
+                self.reposed = changed_feathers(before, after, &mut self.changed);
+                self.all_changed = false;
                 self.export()
             }
             Err(_) => {
@@ -402,4 +467,18 @@ fn check_feather_arrays(config: &Config, feathers: usize) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// What the last call changed (see [`System::changed_feathers`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ChangedFeathers<'a> {
+    /// Indices of the feathers whose record or triangles may differ,
+    /// increasing.
+    pub indices: &'a [u32],
+    /// How many of them changed their pose relative to their root (pitch,
+    /// roll, size, bends); the others only moved with the skin.
+    pub reposed: usize,
+    /// Whether `indices` holds every feather because there was no previous
+    /// result to compare with (create, load, a seek that loads).
+    pub all: bool,
 }

@@ -53,6 +53,7 @@ impl System {
         self.pose_changes = PoseChanges::default();
         self.previous_poses.clear();
         self.export();
+        self.all_changed_now();
         self.on_playback = false;
         Ok(())
     }

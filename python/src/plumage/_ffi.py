@@ -10,7 +10,7 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
-from ctypes import POINTER, c_char_p, c_float, c_int32, c_size_t, c_uint8, c_uint32, c_uint64, c_void_p
+from ctypes import POINTER, c_char_p, c_float, c_int16, c_int32, c_size_t, c_uint8, c_uint16, c_uint32, c_uint64, c_void_p
 from pathlib import Path
 
 ABI_VERSION = 1
@@ -232,6 +232,40 @@ class FeatherGeometry(ctypes.Structure):
     ]
 
 
+class FeatherInstance(ctypes.Structure):
+    _fields_ = [
+        ("root", c_float * 3),
+        ("rotation", c_int16 * 4),
+        ("length", c_float),
+        ("width", c_float),
+        ("bends", c_int16 * 3),
+        ("reserved", c_uint16),
+    ]
+
+
+# PLUMAGE_INSTANCE_BEND_RANGE: a bends value of 32767 is this many radians.
+INSTANCE_BEND_RANGE = 3.1415927
+
+
+class FeatherTemplate(ctypes.Structure):
+    _fields_ = [
+        ("struct_size", c_uint32),
+        ("segments", c_uint32),
+        ("vertex_count", c_uint32),
+        ("triangle_count", c_uint32),
+        ("vane_split", c_float),
+        ("reserved", c_uint32),
+        ("positions", POINTER(c_float)),
+        ("positions_capacity", c_size_t),
+        ("uvs", POINTER(c_float)),
+        ("uvs_capacity", c_size_t),
+        ("indices", POINTER(c_uint32)),
+        ("indices_capacity", c_size_t),
+        ("vertex_segments", POINTER(c_uint32)),
+        ("vertex_segments_capacity", c_size_t),
+    ]
+
+
 def _library_name() -> str:
     if sys.platform == "darwin":
         return "libplumage.dylib"
@@ -261,6 +295,10 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_system_feather_triangles": (c_uint32, [sys_p, f_p, c_size_t, size_p]),
         "plumage_feather_geometry_init": (None, [POINTER(FeatherGeometry)]),
         "plumage_system_feather_geometry": (c_uint32, [sys_p, POINTER(FeatherGeometry)]),
+        "plumage_system_feather_instances": (c_uint32, [sys_p, POINTER(FeatherInstance), c_size_t, size_p]),
+        "plumage_feather_template_init": (None, [POINTER(FeatherTemplate)]),
+        "plumage_system_feather_template": (c_uint32, [sys_p, POINTER(FeatherTemplate)]),
+        "plumage_system_changed_feathers": (c_uint32, [sys_p, POINTER(c_uint32), c_size_t, size_p, POINTER(c_uint32)]),
         "plumage_system_sampling_stats": (c_uint32, [sys_p, POINTER(SamplingStats)]),
         "plumage_system_ordering_stats": (c_uint32, [sys_p, POINTER(OrderingStats)]),
         "plumage_system_frame_stats": (c_uint32, [sys_p, POINTER(FrameStats)]),

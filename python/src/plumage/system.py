@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass, fields
-from typing import Any, Callable, Dict, Optional, Type, TypeVar
+from typing import Any, Callable, Dict, Optional, Tuple, Type, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -185,6 +185,26 @@ class FeatherGeometry:
     placed: npt.NDArray[np.bool_]
 
 
+@dataclass(frozen=True)
+class FeatherTemplate:
+    """The card every feather is instanced from (plumage_system_feather_template).
+
+    positions: (V, 3) float32 in the feather's own frame for unit length and
+    width (x along the unbent shaft 0..1, y across, z 0); uvs: (V, 2)
+    float32; triangles: (T, 3) uint32; vertex_segments: (V,) uint32, the
+    shaft segment carrying each vertex; segments: S; vane_split: where the
+    vane corners sit. `System.feather_instances()` places it (see
+    PlumageFeatherInstance in plumage.h for the convention).
+    """
+
+    segments: int
+    vane_split: float
+    positions: FloatArray
+    uvs: FloatArray
+    triangles: UIntArray
+    vertex_segments: UIntArray
+
+
 S = TypeVar("S")
 
 
@@ -213,6 +233,16 @@ FEATHER_DTYPE = np.dtype(
         ],
         "offsets": [getattr(_ffi.Feather, f[0]).offset for f in _ffi.Feather._fields_],
         "itemsize": ctypes.sizeof(_ffi.Feather),
+    }
+)
+
+# dtype of one PlumageFeatherInstance (36 bytes, same bytes as the C struct)
+INSTANCE_DTYPE = np.dtype(
+    {
+        "names": [f[0] for f in _ffi.FeatherInstance._fields_],
+        "formats": [("<f4", 3), ("<i2", 4), "<f4", "<f4", ("<i2", 3), "<u2"],
+        "offsets": [getattr(_ffi.FeatherInstance, f[0]).offset for f in _ffi.FeatherInstance._fields_],
+        "itemsize": ctypes.sizeof(_ffi.FeatherInstance),
     }
 )
 
@@ -476,6 +506,63 @@ class System:
             triangle_counts=triangle_counts,
             placed=placed.astype(bool),
         )
+
+    # -- instancing -------------------------------------------------------
+    def feather_instances(self) -> np.ndarray:
+        """One packed record per feather (structured array of INSTANCE_DTYPE: root,
+        rotation as snorm16 (x, y, z, w), length, width, bends as snorm16 of
+        INSTANCE_BEND_RANGE), in the order of `feathers()`."""
+        h = self._h()
+        n = ctypes.c_size_t()
+        out = np.zeros(self.feather_count, dtype=INSTANCE_DTYPE)
+        ptr = out.ctypes.data_as(ctypes.POINTER(_ffi.FeatherInstance))
+        _check(lib.plumage_system_feather_instances(h, ptr, out.shape[0], ctypes.byref(n)), h, "plumage_system_feather_instances")
+        return out[: n.value]
+
+    def feather_template(self) -> FeatherTemplate:
+        """The template card of the system's feathers."""
+        h = self._h()
+        t = _ffi.FeatherTemplate()
+        lib.plumage_feather_template_init(ctypes.byref(t))
+        _check(lib.plumage_system_feather_template(h, ctypes.byref(t)), h, "plumage_system_feather_template")
+        nv, nt = int(t.vertex_count), int(t.triangle_count)
+        positions = np.empty((nv, 3), dtype=np.float32)
+        uvs = np.empty((nv, 2), dtype=np.float32)
+        triangles = np.empty((nt, 3), dtype=np.uint32)
+        vertex_segments = np.empty(nv, dtype=np.uint32)
+        f_p, u_p = ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_uint32)
+        for name, arr, ptr_type in (
+            ("positions", positions, f_p),
+            ("uvs", uvs, f_p),
+            ("indices", triangles, u_p),
+            ("vertex_segments", vertex_segments, u_p),
+        ):
+            setattr(t, name, arr.ctypes.data_as(ptr_type))
+            setattr(t, name + "_capacity", arr.size)
+        _check(lib.plumage_system_feather_template(h, ctypes.byref(t)), h, "plumage_system_feather_template")
+        return FeatherTemplate(int(t.segments), float(t.vane_split), positions, uvs, triangles, vertex_segments)
+
+    def changed_feathers(self) -> Tuple[UIntArray, bool]:
+        """(indices, all): the feathers whose record and triangles the last create,
+        step, evaluate, load or seek may have changed (every other one is as
+        before, bit for bit), and whether that is every feather because there
+        was nothing to compare with."""
+        h = self._h()
+        n = ctypes.c_size_t()
+        every = ctypes.c_uint32()
+        status = lib.plumage_system_changed_feathers(h, None, 0, ctypes.byref(n), ctypes.byref(every))
+        if status == _ffi.STATUS_OK:
+            return np.empty(0, dtype=np.uint32), bool(every.value)
+        if status != _ffi.STATUS_BUFFER_TOO_SMALL:
+            _check(status, h, "plumage_system_changed_feathers")
+        out = np.empty(n.value, dtype=np.uint32)
+        ptr = out.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32))
+        _check(
+            lib.plumage_system_changed_feathers(h, ptr, out.size, ctypes.byref(n), ctypes.byref(every)),
+            h,
+            "plumage_system_changed_feathers",
+        )
+        return out[: n.value], bool(every.value)
 
     # -- figures ----------------------------------------------------------
     def _stats(self, fn: Any, raw_type: Type[ctypes.Structure], call: str) -> Optional[ctypes.Structure]:
