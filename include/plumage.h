@@ -1356,7 +1356,11 @@ void plumage_part_stats_init(struct PlumagePartStats *out);
  * `cfg` is NULL or points to a `PlumageConfig` whose `struct_size` bytes are
  * readable; `rest` is NULL or points to a `PlumageMeshDesc` whose arrays hold
  * the counts it states; `out` is NULL or points to writable memory for one
- * pointer. Nothing is kept after the call returns.
+ * pointer. The config and the mesh's arrays are copied and not read after
+ * the call returns; the config's callbacks (`progress`, `parallel_for`)
+ * and their `progress_user_data` and `parallel_for_context` are kept and
+ * may be called during any later call on the system, until destroy
+ * returns OK: they must stay valid that long.
  */
 uint32_t plumage_system_create(const struct PlumageConfig *cfg,
                                const struct PlumageMeshDesc *rest,
@@ -1735,12 +1739,16 @@ uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blo
 uint32_t plumage_system_seek(struct PlumageSystem *sys, uint64_t frame_index, uint64_t *out_from);
 
 /**
- * Copies the message of the last failed call on `sys` into `buf` (at most
+ * Copies the message of the most recent call on `sys` into `buf` (at most
  * `capacity` bytes, always NUL-terminated when `capacity > 0`) and returns
  * the size needed including the NUL. `buf` may be NULL to ask the size.
- * With `sys == NULL`, reports the last failure on the calling thread of a
- * call that had no usable system (a refused create, a NULL system). An
- * empty string means no failure was recorded.
+ * Every call on `sys` that returns PLUMAGE_STATUS_OK empties the message
+ * (size queries and figure getters included) and every other status sets
+ * it, so it always describes the latest call (with calls on several
+ * threads at once, whichever ended last); this call itself changes
+ * nothing. With `sys == NULL`, the same for the calling thread's most
+ * recent call that had no usable system: create (OK or refused), the
+ * preset init, a call given a NULL system.
  *
  * # Safety
  * `sys` is NULL or a live handle from `plumage_system_create`; `buf` is NULL

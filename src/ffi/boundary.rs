@@ -4,7 +4,8 @@
 //! `with_system_ref` or `without_system`: NULL checks first, then the body
 //! behind `catch_unwind`. A caught panic poisons the handle. Error messages go
 //! to the handle's last-error slot, or to a thread-local slot when there is
-//! no handle (e.g. a refused create).
+//! no handle (e.g. a refused create). The slot describes the most recent
+//! call: one that returns OK empties it.
 //!
 //! Silence: the first boundary call installs a process-wide panic hook once.
 //! A panic on a thread that is inside a boundary call, or on a worker thread
@@ -41,6 +42,8 @@ pub struct PlumageSystem {
     progress_calls: Mutex<()>,
     poisoned: AtomicBool,
     last_error: Mutex<CString>,
+    /// Whether `last_error` holds a message.
+    has_error: AtomicBool,
 }
 
 impl PlumageSystem {
@@ -52,12 +55,22 @@ impl PlumageSystem {
             progress_calls: Mutex::new(()),
             poisoned: AtomicBool::new(false),
             last_error: Mutex::new(CString::default()),
+            has_error: AtomicBool::new(false),
         }
     }
 
     fn set_error(&self, message: &str) {
         let mut slot = self.last_error.lock().unwrap_or_else(|e| e.into_inner());
         *slot = to_cstring(message);
+        self.has_error.store(true, Ordering::Release);
+    }
+
+    /// Empties the last-error slot (a call returned OK). Without a message
+    /// recorded this touches no lock: read-only calls stay lock-free.
+    fn clear_error(&self) {
+        if self.has_error.swap(false, Ordering::AcqRel) {
+            *self.last_error.lock().unwrap_or_else(|e| e.into_inner()) = CString::default();
+        }
     }
 
     pub(crate) fn set_busy_error(&self) {
@@ -144,6 +157,15 @@ thread_local! {
 
 pub(crate) fn set_thread_error(message: &str) {
     THREAD_ERROR.with(|slot| *slot.borrow_mut() = to_cstring(message));
+}
+
+/// Empties this thread's last-error slot (a call without a system returned OK).
+fn clear_thread_error() {
+    THREAD_ERROR.with(|slot| {
+        if !slot.borrow().is_empty() {
+            *slot.borrow_mut() = CString::default();
+        }
+    });
 }
 
 pub(crate) fn thread_error() -> CString {
@@ -311,7 +333,10 @@ pub(crate) fn with_system_ref_progress(
 
 fn settle(handle: &PlumageSystem, outcome: std::thread::Result<CallResult>) -> u32 {
     match outcome {
-        Ok(Ok(())) => PLUMAGE_STATUS_OK,
+        Ok(Ok(())) => {
+            handle.clear_error();
+            PLUMAGE_STATUS_OK
+        }
         Ok(Err(failure)) => {
             handle.set_error(&failure.message);
             failure.status
@@ -327,7 +352,10 @@ fn settle(handle: &PlumageSystem, outcome: std::thread::Result<CallResult>) -> u
 /// A call without a system (create, and calls on the library itself).
 pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
     match quietly(body) {
-        Ok(Ok(())) => PLUMAGE_STATUS_OK,
+        Ok(Ok(())) => {
+            clear_thread_error();
+            PLUMAGE_STATUS_OK
+        }
         Ok(Err(failure)) => {
             set_thread_error(&failure.message);
             failure.status

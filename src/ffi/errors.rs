@@ -6,12 +6,16 @@ use super::boundary::{PlumageSystem, quietly, thread_error};
 use super::boundary::{with_system, with_system_ref};
 use std::ffi::c_char;
 
-/// Copies the message of the last failed call on `sys` into `buf` (at most
+/// Copies the message of the most recent call on `sys` into `buf` (at most
 /// `capacity` bytes, always NUL-terminated when `capacity > 0`) and returns
 /// the size needed including the NUL. `buf` may be NULL to ask the size.
-/// With `sys == NULL`, reports the last failure on the calling thread of a
-/// call that had no usable system (a refused create, a NULL system). An
-/// empty string means no failure was recorded.
+/// Every call on `sys` that returns PLUMAGE_STATUS_OK empties the message
+/// (size queries and figure getters included) and every other status sets
+/// it, so it always describes the latest call (with calls on several
+/// threads at once, whichever ended last); this call itself changes
+/// nothing. With `sys == NULL`, the same for the calling thread's most
+/// recent call that had no usable system: create (OK or refused), the
+/// preset init, a call given a NULL system.
 ///
 /// # Safety
 /// `sys` is NULL or a live handle from `plumage_system_create`; `buf` is NULL

@@ -17,7 +17,11 @@ use super::status::{PLUMAGE_STATUS_BUSY, PLUMAGE_STATUS_OK};
 /// `cfg` is NULL or points to a `PlumageConfig` whose `struct_size` bytes are
 /// readable; `rest` is NULL or points to a `PlumageMeshDesc` whose arrays hold
 /// the counts it states; `out` is NULL or points to writable memory for one
-/// pointer. Nothing is kept after the call returns.
+/// pointer. The config and the mesh's arrays are copied and not read after
+/// the call returns; the config's callbacks (`progress`, `parallel_for`)
+/// and their `progress_user_data` and `parallel_for_context` are kept and
+/// may be called during any later call on the system, until destroy
+/// returns OK: they must stay valid that long.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn plumage_system_create(
     cfg: *const PlumageConfig,
