@@ -63,24 +63,6 @@ macro_rules! heap_size_of_fields {
 }
 pub(crate) use heap_size_of_fields;
 
-/// The bytes the per-feather arrays of a system with `feathers` feathers
-/// hold at the least: one element of each array every feather has (rest
-/// binding, frame, pose, triangles, record, the adjuster's triangles and
-/// obstacle boxes). A lower bound of what create will allocate, known
-/// before it allocates: a limit below it is refused up front.
-pub fn feather_arrays_floor(feathers: usize) -> usize {
-    use crate::adjustment::obstacle::ObstacleBoxes;
-    use crate::feather::{FeatherPose, FeatherTriangles};
-    use std::mem::size_of;
-    let per_feather = size_of::<crate::roots::RootBinding>()
-        + size_of::<crate::geometry::RootFrame>()
-        + size_of::<FeatherPose>()
-        + size_of::<FeatherTriangles>() * 2
-        + size_of::<ObstacleBoxes>()
-        + size_of::<crate::stats::FeatherRecord>();
-    feathers.saturating_mul(per_feather)
-}
-
 /// The refusal of a system that would hold `bytes` under `limit`.
 pub(crate) fn over_limit(what: &str, bytes: usize, limit: usize) -> crate::error::Error {
     crate::error::Error::new(

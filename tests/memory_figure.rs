@@ -94,7 +94,7 @@ fn the_memory_limit_is_kept(mesh: &MeshInput<'_>, frames: &[Vec<f32>]) {
 
     // Below what the feathers' own arrays need: refused before they are
     // allocated (the call's peak stays far below the full system's size).
-    let floor = plumage::memory::feather_arrays_floor(10_000);
+    let floor = plumage::system::feather_arrays_floor(10_000);
     assert!(floor < needed, "the floor {floor} is a lower bound of {needed}");
     let before = LIVE.load(Ordering::SeqCst);
     PEAK.store(before, Ordering::SeqCst);

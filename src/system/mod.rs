@@ -458,7 +458,7 @@ impl System {
 /// Refuses a create whose `feathers` feathers' own arrays would pass
 /// `config.memory_limit`, before they are allocated.
 fn check_feather_arrays(config: &Config, feathers: usize) -> Result<()> {
-    let floor = crate::memory::feather_arrays_floor(feathers);
+    let floor = feather_arrays_floor(feathers);
     if config.memory_limit > 0 && floor > config.memory_limit {
         return Err(crate::memory::over_limit(
             &format!("{feathers} feathers' own arrays alone would hold"),
@@ -481,4 +481,22 @@ pub struct ChangedFeathers<'a> {
     /// Whether `indices` holds every feather because there was no previous
     /// result to compare with (create, load, a seek that loads).
     pub all: bool,
+}
+
+/// The bytes the per-feather arrays of a system with `feathers` feathers
+/// hold at the least: one element of each array every feather has (rest
+/// binding, frame, pose, triangles, record, the adjuster's triangles and
+/// obstacle boxes). A lower bound of what create will allocate, known
+/// before it allocates: a limit below it is refused up front.
+pub fn feather_arrays_floor(feathers: usize) -> usize {
+    use crate::adjustment::obstacle::ObstacleBoxes;
+    use crate::feather::{FeatherPose, FeatherTriangles};
+    use std::mem::size_of;
+    let per_feather = size_of::<crate::roots::RootBinding>()
+        + size_of::<crate::geometry::RootFrame>()
+        + size_of::<FeatherPose>()
+        + size_of::<FeatherTriangles>() * 2
+        + size_of::<ObstacleBoxes>()
+        + size_of::<crate::stats::FeatherRecord>();
+    feathers.saturating_mul(per_feather)
 }
