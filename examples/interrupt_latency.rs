@@ -61,11 +61,15 @@ struct Gaps {
 }
 
 impl ProgressSink for Gaps {
-    fn report(&self, phase: Phase, _fraction: f32) -> bool {
+    fn report(&self, phase: Phase, fraction: f32) -> bool {
         let now = Instant::now();
         let mut last = self.last.lock().unwrap();
         if let Some((p, t)) = *last {
-            self.gaps.lock().unwrap().push((p, now.duration_since(t).as_secs_f64() * 1e3));
+            let gap = now.duration_since(t).as_secs_f64() * 1e3;
+            if std::env::var_os("GAP_LOG").is_some() && gap > 1.5 {
+                println!("  gap {gap:.2} ms before {phase:?} {fraction:.3} (after {p:?})");
+            }
+            self.gaps.lock().unwrap().push((p, gap));
         }
         *last = Some((phase, now));
         true
@@ -125,8 +129,9 @@ fn main() {
         all.extend_from_slice(&ms);
         summary(&format!("evaluate, {phase:?}"), ms);
     }
-    let ms: Vec<f64> =
-        (0..trials).filter_map(|t| trial(Phase::Validating, k(t), |p| sys.validate_with_progress(p).map(drop))).collect();
+    let ms: Vec<f64> = (0..trials)
+        .filter_map(|t| trial(Phase::Validating, k(t), |p| sys.validate_with_progress(p).map(drop)))
+        .collect();
     all.extend_from_slice(&ms);
     summary("validate, Validating", ms);
     summary("every call and phase", all);

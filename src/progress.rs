@@ -79,6 +79,28 @@ impl<'a> Progress<'a> {
     }
 }
 
+impl Progress<'_> {
+    /// For item `i` of a long loop (any thread): whether to go on. Checks
+    /// in as [`Progress::check`] every [`POLL_STRIDE`] items and reads the
+    /// stop flag in between, so a loop of short items stops within about
+    /// one report interval. A loop that was told to stop skips its
+    /// remaining items; the caller's next `check` then returns
+    /// `Interrupted` and the partial results are dropped.
+    #[inline]
+    pub fn poll(&self, phase: Phase, fraction: f32, i: usize) -> bool {
+        if self.sink.is_none() {
+            return true;
+        }
+        if self.stopped.load(Ordering::Relaxed) {
+            return false;
+        }
+        i % POLL_STRIDE != 0 || self.check(phase, fraction).is_ok()
+    }
+}
+
+/// Items of a loop between two check-ins of [`Progress::poll`].
+const POLL_STRIDE: usize = 16;
+
 fn interrupted() -> Error {
     Error::new(ErrorKind::Interrupted, "interrupted by the progress callback; the system is as it was before the call")
 }

@@ -12,6 +12,7 @@
 
 use crate::body::BodyIndex;
 use crate::interior::BodyInterior;
+use crate::progress::{Phase, Progress};
 use crate::rng::Rng;
 use crate::triangle_grid::{TriangleGrid, ray_triangle};
 use glam::Vec3;
@@ -68,7 +69,8 @@ impl CoverageCount {
 
 /// Draws `count` probes on the feathered skin with `seed`, leaves out those
 /// buried inside `body` and counts those whose normal ray meets a triangle
-/// of `feathers` within `reach`.
+/// of `feathers` within `reach`. Polls `progress` per probe: once it says
+/// stop, the remaining probes are skipped (the caller's next check fails).
 pub fn count_covered(
     feathers: &TriangleGrid,
     reach: f32,
@@ -76,13 +78,17 @@ pub fn count_covered(
     body: &BodyIndex,
     count: usize,
     seed: u64,
+    progress: &Progress,
 ) -> CoverageCount {
     let drawn = surface_probes(skin, count, seed);
     let interior = BodyInterior::new(body);
     let outcome: Vec<(bool, bool)> = drawn
         .par_iter()
-        .map(|&(p, n)| {
-            if interior.holds(p, n) {
+        .enumerate()
+        .map(|(i, &(p, n))| {
+            if !progress.poll(Phase::Validating, 0.2, i) {
+                (false, false)
+            } else if interior.holds(p, n) {
                 (true, false)
             } else {
                 (false, feathers.ray_cast(p, n, reach, |t| ray_triangle(p, n, feathers.corners(t))).is_some())

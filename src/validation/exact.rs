@@ -9,6 +9,7 @@ use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, MAX_TRIANGLES, feather_normal, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::intersect::{Prepared, prepared_intersect};
+use crate::progress::{Phase, Progress};
 use crate::triangle_grid::Aabb;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -81,9 +82,23 @@ pub fn body_penetrations(
     poses: &[FeatherPose],
     body: &BodyIndex,
 ) -> Vec<u32> {
+    body_penetrations_polled(frames, shapes, poses, body, &Progress::none())
+}
+
+/// As [`body_penetrations`], polling `progress` per feather (once it says
+/// stop the rest are skipped; the caller's next check fails).
+pub(crate) fn body_penetrations_polled(
+    frames: &[RootFrame],
+    shapes: &[FeatherShape],
+    poses: &[FeatherPose],
+    body: &BodyIndex,
+    progress: &Progress,
+) -> Vec<u32> {
     let hits: Vec<bool> = (0..frames.len())
         .into_par_iter()
-        .map_init(BodyScratch::default, |scratch, i| penetrates_body(&frames[i], &shapes[i], poses[i], body, scratch))
+        .map_init(BodyScratch::default, |scratch, i| {
+            progress.poll(Phase::Validating, 0.8, i) && penetrates_body(&frames[i], &shapes[i], poses[i], body, scratch)
+        })
         .collect();
     hits.iter().enumerate().filter(|&(_, &h)| h).map(|(i, _)| i as u32).collect()
 }

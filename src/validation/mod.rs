@@ -91,13 +91,14 @@ pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) 
     let (grid, owner) = feather_grid(feather_triangles);
     progress.check(Phase::Validating, 0.1)?;
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
-    let coverage = count_covered(&grid, longest, skin, body, probes, seed);
+    let coverage = count_covered(&grid, longest, skin, body, probes, seed, progress);
     progress.check(Phase::Validating, 0.4)?;
-    let intersecting_pairs = intersecting_pairs_in(&grid, &owner);
+    let intersecting_pairs = intersecting_pairs_in(&grid, &owner, progress);
     progress.check(Phase::Validating, 0.7)?;
-    let body_penetrations = body_penetrations(frames, shapes, poses, body);
+    let body_penetrations = exact::body_penetrations_polled(frames, shapes, poses, body, progress);
     progress.check(Phase::Validating, 0.9)?;
-    let (tip_heights, tip_stacks) = how_tips_lie(input, OwnedTriangles { grid: &grid, owner: &owner }, |_| true);
+    let polled = |i: usize| progress.poll(Phase::Validating, 0.95, i);
+    let (tip_heights, tip_stacks) = how_tips_lie(input, OwnedTriangles { grid: &grid, owner: &owner }, polled);
     progress.check(Phase::Validating, 1.0)?;
     Ok(Validation {
         intersecting_pairs,
@@ -122,7 +123,7 @@ pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation
     let ValidationInput { feather_triangles, frames, shapes, poses, body, skin, probes, seed } = *input;
     let (grid, owner) = feather_grid(feather_triangles);
     let longest = shapes.iter().map(|s| s.length).fold(0.0f32, f32::max);
-    let coverage = count_covered(&grid, longest, skin, body, probes, seed);
+    let coverage = count_covered(&grid, longest, skin, body, probes, seed, &Progress::none());
     let is_member = |i: usize| member.get(i).copied().unwrap_or(false);
     let picked: Vec<usize> = (0..frames.len()).filter(|&i| is_member(i)).collect();
     let (f, s, p): (Vec<RootFrame>, Vec<FeatherShape>, Vec<FeatherPose>) = (
@@ -130,7 +131,7 @@ pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation
         picked.iter().map(|&i| shapes[i]).collect(),
         picked.iter().map(|&i| poses[i]).collect(),
     );
-    let mut intersecting_pairs = intersecting_pairs_in(&grid, &owner);
+    let mut intersecting_pairs = intersecting_pairs_in(&grid, &owner, &Progress::none());
     intersecting_pairs.retain(|&(a, b)| is_member(a as usize) || is_member(b as usize));
     let (tip_heights, tip_stacks) = how_tips_lie(input, OwnedTriangles { grid: &grid, owner: &owner }, is_member);
     Validation {
@@ -167,7 +168,7 @@ pub fn coverage(
     probes: usize,
     seed: u64,
 ) -> f64 {
-    count_covered(&feather_grid(feather_triangles).0, reach, skin, body, probes, seed).fraction()
+    count_covered(&feather_grid(feather_triangles).0, reach, skin, body, probes, seed, &Progress::none()).fraction()
 }
 
 /// A grid over every feather triangle, feather after feather, and the
@@ -186,15 +187,20 @@ fn feather_grid(feather_triangles: &[FeatherTriangles]) -> (TriangleGrid, Vec<u3
 /// nothing. Sorted, without repeats.
 pub fn intersecting_pairs(feather_triangles: &[FeatherTriangles]) -> Vec<(u32, u32)> {
     let (grid, owner) = feather_grid(feather_triangles);
-    intersecting_pairs_in(&grid, &owner)
+    intersecting_pairs_in(&grid, &owner, &Progress::none())
 }
 
-fn intersecting_pairs_in(grid: &TriangleGrid, owner: &[u32]) -> Vec<(u32, u32)> {
+/// The pairs of [`intersecting_pairs`] from a built grid, polling
+/// `progress` per non-empty cell (stopped, the rest are skipped).
+fn intersecting_pairs_in(grid: &TriangleGrid, owner: &[u32], progress: &Progress) -> Vec<(u32, u32)> {
     let mut pairs: Vec<(u32, u32)> = (0..grid.cell_count())
         .into_par_iter()
         .flat_map_iter(|cell| {
             let items = grid.cell_items(cell);
             let mut found = Vec::new();
+            if !items.is_empty() && !progress.poll(Phase::Validating, 0.5, cell) {
+                return found;
+            }
             for (k, &ta) in items.iter().enumerate() {
                 let ba = grid.bounds(ta);
                 for &tb in &items[k + 1..] {
