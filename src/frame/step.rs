@@ -311,7 +311,7 @@ impl Pass<'_> {
         poses: &mut [FeatherPose],
         candidates: CandidateLists<'_>,
         selection: Selection<'_>,
-        keep_going: &dyn Fn(f32) -> bool,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
         let d = self.dressing;
         let walk_with = match walk {

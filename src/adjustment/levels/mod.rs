@@ -40,7 +40,9 @@ mod visit;
 
 use super::settle::tip_above;
 pub use visit::{CandidateLists, Selection};
-use visit::{Inputs, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level};
+use visit::{
+    Inputs, Level, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level,
+};
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
@@ -213,7 +215,7 @@ impl Adjuster {
         run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
         selection: Selection<'_>,
-        keep_going: &dyn Fn(f32) -> bool,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
         self.ordered_run(run, poses, selection, keep_going, (false, false))
     }
@@ -237,7 +239,7 @@ impl Adjuster {
         run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
         selection: Selection<'_>,
-        keep_going: &dyn Fn(f32) -> bool,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
         self.ordered_run(run, poses, selection, keep_going, (true, true))
     }
@@ -250,7 +252,7 @@ impl Adjuster {
         run: &OrderedRun<'_>,
         poses: &mut [FeatherPose],
         selection: Selection<'_>,
-        keep_going: &dyn Fn(f32) -> bool,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
         (sparse, pairs_only): (bool, bool),
     ) -> Option<AdjustStats> {
         let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps } = *run;
@@ -295,8 +297,19 @@ impl Adjuster {
         self.settling.resize(n, false);
 
         let mut stats = AdjustStats::default();
-        let inputs =
-            Inputs { frames, shapes, rank, candidates, body, params, steps, selection, pairs_only, settle_rate };
+        let inputs = Inputs {
+            frames,
+            shapes,
+            rank,
+            candidates,
+            body,
+            params,
+            steps,
+            selection,
+            pairs_only,
+            settle_rate,
+            keep_going,
+        };
         self.prechecked.clear();
         self.prechecked.resize(n, Precheck::None);
         // Verifying by levels, the suspects are checked ahead first; when
@@ -325,7 +338,7 @@ impl Adjuster {
                 self.mark_selected(n, selection);
             }
             for (k, &i) in order.iter().enumerate() {
-                if k % 256 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
+                if k % 16 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
                     return None;
                 }
                 let i = i as usize;
@@ -368,7 +381,12 @@ impl Adjuster {
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
             let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-            run_level(&inputs, items, poses, posed, marks, outcomes, &mut self.workers);
+            let done = l as f32 / levels.max(1) as f32;
+            run_level(&inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
+            // A level cut short left some outcomes unvisited: nothing is applied.
+            if !keep_going(done) {
+                return None;
+            }
             let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
             for k in 0..end - start {
                 let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
@@ -410,7 +428,11 @@ impl Adjuster {
             .zip(self.precheck_outcomes.par_chunks_mut(chunk))
             .zip(self.workers.par_iter_mut())
             .for_each(|((items, outcomes), worker)| {
-                for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+                for (k, (&i, out)) in items.iter().zip(outcomes.iter_mut()).enumerate() {
+                    // Stopped: the rest stay unchecked (the run is abandoned).
+                    if k % 16 == 0 && !(inputs.keep_going)(0.0) {
+                        break;
+                    }
                     let i = i as usize;
                     collect_obstacle_ids(inputs, i, posed, worker);
                     *out =

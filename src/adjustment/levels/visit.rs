@@ -144,6 +144,9 @@ pub(super) struct Inputs<'a> {
     pub(super) pairs_only: bool,
     /// See [`super::Adjuster::settle_next_run`]; 0 = the solved poses.
     pub(super) settle_rate: f32,
+    /// Asked (with the share done) between feathers; once it says stop,
+    /// the run is abandoned and its remaining feathers are not visited.
+    pub(super) keep_going: &'a (dyn Fn(f32) -> bool + Sync),
 }
 
 /// What became of one feather of a level.
@@ -180,12 +183,19 @@ pub(super) struct Posed<'a> {
 /// Levels with fewer feathers than this are visited on the calling thread.
 const PARALLEL_LEVEL_MIN: usize = 4;
 
+/// One level of the obstacle relation: its feathers, and the share of the
+/// run done when it starts (what `keep_going` is told inside it).
+pub(super) struct Level<'a> {
+    pub(super) items: &'a [u32],
+    pub(super) done: f32,
+}
+
 /// Adjusts the feathers of one level, in parallel chunks when it is large
 /// enough; each chunk has its own worker scratch. Results land in
 /// `outcomes` by position.
 pub(super) fn run_level(
     inputs: &Inputs<'_>,
-    items: &[u32],
+    Level { items, done }: Level<'_>,
     poses: &[FeatherPose],
     posed: Posed<'_>,
     marks: Marks<'_>,
@@ -194,9 +204,13 @@ pub(super) fn run_level(
 ) {
     // Waking another thread costs about as much as checking a feather, and
     // most levels hold one or two: those run on this thread. Which worker
-    // visits a feather never changes what it finds.
+    // visits a feather never changes what it finds. Once `keep_going` says
+    // stop, the rest are left unvisited (the caller then abandons the run).
     let visit = |items: &[u32], outcomes: &mut [Visit], worker: &mut Worker| {
-        for (&i, out) in items.iter().zip(outcomes.iter_mut()) {
+        for (k, (&i, out)) in items.iter().zip(outcomes.iter_mut()).enumerate() {
+            if k % 16 == 15 && !(inputs.keep_going)(done) {
+                break;
+            }
             *out = adjust_one(inputs, i as usize, poses, posed, marks, worker);
         }
     };
