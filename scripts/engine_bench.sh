@@ -37,8 +37,8 @@ field() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<<"$2"; }
 echo "Commit $(git rev-parse --short HEAD) ($(git status --porcelain --untracked-files=no | grep -q . && echo 'with local changes' || echo clean)), $(date -u +%Y-%m-%dT%H:%MZ), load average at the start $(cut -d' ' -f1-3 /proc/loadavg)."
 echo "$(grep -m1 'model name' /proc/cpuinfo | sed 's/.*: //'), $(nproc) cores. The capsule: $("$exe" --frames 1 --feathers 100 | sed -n 's/^engine_example: capsule of \([0-9]*\) triangles, \([0-9]*\) vertices.*/\1 triangles, \2 vertices/p'); threads = 1, $frames frames at 60 fps."
 echo
-echo "| feathers | preset | moving | step ms, mean | step ms, p95 | readjusted / frame | listed / frame | records + changed list, bytes / frame | ranges / frame | every record, bytes | full geometry, bytes / frame | full geometry ÷ records + list | CPU / wall | pairs, penetrations after the last frame |"
-echo "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+echo "| feathers | preset | moving | step ms, mean | step ms, p95 | readjusted / frame | listed / frame | records + changed list, bytes / frame | ranges / frame | every record, bytes | full geometry, bytes / frame | full geometry ÷ records + list | records pull + copy ms | geometry pull ms | CPU / wall | pairs, penetrations after the last frame |"
+echo "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 for n in $feathers; do
   for preset in default kite; do
     for wave in whole far-half; do
@@ -49,12 +49,13 @@ for n in $feathers; do
       v="$(sed -n 's/.*: \([0-9]*\) intersecting pairs, \([0-9]*\) body penetrations.*/\1, \2/p' <<<"$out")"
       moving="whole limb"
       [[ "$wave" == far-half ]] && moving="far half"
-      printf '| %s | %s | %s | %s | %s | %s (%s %%) | %s (%s %%) | %s | %s | %s | %s | %s | %s | %s |\n' \
+      printf '| %s | %s | %s | %s | %s | %s (%s %%) | %s (%s %%) | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' \
         "$(group "$(field feathers "$r")")" "$preset" "$moving" "$(printf %.1f "$(field step_ms_mean "$r")")" "$(printf %.1f "$(field step_ms_p95 "$r")")" \
         "$(field adjusted_mean "$r")" "$(awk -v a="$(field adjusted_mean "$r")" -v n="$(field feathers "$r")" 'BEGIN { printf "%.1f", 100 * a / n }')" \
         "$(field listed_mean "$r")" "$(field listed_percent "$r")" \
         "$(group "$(field record_bytes_mean "$r")")" "$(field ranges_mean "$r")" "$(group "$(field all_records_bytes "$r")")" \
-        "$(group "$(field geometry_bytes "$r")")" "$(printf %.1f "$(field ratio "$r")")" "$(field cpu_per_wall "$r")" "$v"
+        "$(group "$(field geometry_bytes "$r")")" "$(printf %.1f "$(field ratio "$r")")" \
+        "$(printf %.2f "$(field pull_ms_mean "$r")")" "$(printf %.2f "$(field geometry_ms_mean "$r")")" "$(field cpu_per_wall "$r")" "$v"
     done
   done
 done

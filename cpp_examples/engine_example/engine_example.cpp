@@ -273,11 +273,11 @@ int main(int argc, char** argv) {
         std::printf("    full geometry / records + changed list: %.1f\n", geometry_bytes / std::max(bytes_mean, 1.0));
         std::printf("RESULT preset=%s wave=%s feathers=%zu frames=%u step_ms_mean=%.3f step_ms_p95=%.3f listed_mean=%.1f "
                     "listed_percent=%.1f ranges_mean=%.1f record_bytes_mean=%.0f all_records_bytes=%zu geometry_bytes=%zu "
-                    "ratio=%.2f adjusted_mean=%.1f create_s=%.3f cpu_per_wall=%.2f\n",
+                    "ratio=%.2f pull_ms_mean=%.3f geometry_ms_mean=%.3f adjusted_mean=%.1f create_s=%.3f cpu_per_wall=%.2f\n",
                     preset, wave, n, opt.frames, mean(step_ms), p95(step_ms), listed_mean,
                     100.0 * listed_mean / static_cast<double>(n), mean(ranges), bytes_mean,
                     n * sizeof(PlumageFeatherInstance), geometry_bytes, geometry_bytes / std::max(bytes_mean, 1.0),
-                    mean(adjusted), create_s, cpu_per_wall);
+                    mean(pull_ms), mean(geometry_ms), mean(adjusted), create_s, cpu_per_wall);
 
         if (opt.validate) {
             const PlumageValidation v = sys.validate();
