@@ -9,7 +9,7 @@
 # bytes per frame on stdout. Figures only: nothing fails on speed (a run
 # fails only when the example does: its buffer missed a change).
 #
-#   ./scripts/engine_bench.sh                               # about 3 to 6 min on 2 shared cores
+#   ./scripts/engine_bench.sh                               # about 1.5 min on 2 shared cores
 #   ./scripts/engine_bench.sh --feathers 2000 --frames 30   # smaller
 set -euo pipefail
 cd "$(dirname "$0")/.."
