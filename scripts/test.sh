@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs every test: the Rust tests (unit, integration, header drift), then the
 # C++ tests under ctest, in a normal build and in an ASan+UBSan build, and the
-# installed library from a separate consumer project (scripts/consumer_test.sh),
+# installed library from a separate consumer project (scripts/consumer_test.sh,
+# then from a library-only build: scripts/library_only_test.sh),
 # and a short libFuzzer run over the host's glTF reader (scripts/fuzz_gltf.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -18,6 +19,9 @@ ctest --test-dir build --output-on-failure
 
 echo "== install into a temporary prefix, then the separate consumer project against it"
 scripts/consumer_test.sh build
+
+echo "== the library alone: a library-only build (no tinygltf, no nlohmann-json) installed and consumed"
+scripts/library_only_test.sh
 
 echo "== Python package: pytest (venv in build/python-venv)"
 py_env=build/python-venv
