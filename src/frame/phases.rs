@@ -4,8 +4,10 @@
 use crate::Mode;
 use crate::adjustment::Adjuster;
 use crate::coat::{Coat, Dressing};
+use crate::error::Result;
 use crate::feather::shaft_direction;
 use crate::ordering::Priorities;
+use crate::progress::{Phase, Progress};
 use crate::stats::OrderingReport;
 use glam::Vec3;
 use std::time::Instant;
@@ -56,17 +58,20 @@ pub(super) fn static_order(coat: &mut Coat, dressing: &Dressing, work: &mut Work
 /// the obstacle candidates at the coat's current root frames) on the pool,
 /// the body index at the coat's positions beside them. Returns the seconds
 /// the neighbourhoods took.
-pub(super) fn neighbourhoods_and_body(coat: &mut Coat, dressing: &Dressing) -> f64 {
+pub(super) fn neighbourhoods_and_body(coat: &mut Coat, dressing: &Dressing, progress: &Progress) -> Result<f64> {
     let Coat { neighbourhoods, frames, body, positions, .. } = coat;
+    let keep_going = || progress.check(Phase::Ordering, 0.1).is_ok();
     let (seconds, ()) = rayon::join(
         || {
             let start = Instant::now();
-            neighbourhoods.rebuild(frames, &dressing.reach, &dressing.neighbour_params);
+            neighbourhoods.rebuild_until(frames, &dressing.reach, &dressing.neighbour_params, &keep_going);
             start.elapsed().as_secs_f64()
         },
         || body.rebuild(positions, &dressing.triangles),
     );
-    seconds
+    // Stopped: the rows are half built; the caller restores the coat.
+    progress.check(Phase::Ordering, 0.2)?;
+    Ok(seconds)
 }
 
 /// Phase 4, body: the body's triangles at the coat's positions, indexed.

@@ -40,10 +40,11 @@ pub fn solve_beside<R: Send>(
     beside: impl FnOnce() -> R + Send,
 ) -> Result<R> {
     let start = Instant::now();
-    coat.pose(dressing, positions);
     progress.check(Phase::Ordering, 0.0)?;
+    coat.pose(dressing, positions);
+    progress.check(Phase::Ordering, 0.1)?;
     let order_start = Instant::now();
-    let neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing);
+    let neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing, progress)?;
     progress.check(Phase::Ordering, 0.5)?;
     coat.poses.clear();
     coat.poses.resize(dressing.len(), FeatherPose::default());

@@ -138,7 +138,7 @@ pub fn step_coat(
     let mut neighbourhood_seconds = 0.0;
     let body_indexed = incremental && dressing.config.recompute_neighbourhoods;
     if body_indexed {
-        neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing);
+        neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing, progress)?;
     }
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
@@ -149,6 +149,7 @@ pub fn step_coat(
     // 2. R_k from the relative motion of the roots since the last frame.
     root_maps(&step.previous_frames, &coat.frames, &mut step.maps);
     surroundings_displacement(coat, dressing, step, verify);
+    progress.check(Phase::Ordering, 0.4)?;
     step.seeds.clear();
     step.seeds.resize(n, false);
     let drift = if verify { dressing.config.drift_tolerance } else { dressing.config.theta_s };
@@ -181,6 +182,7 @@ pub fn step_coat(
         let priorities = Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda);
         let pairs = dressing.config.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
         let stats = coat.order.update_frame(pairs, &step.r_k, &priorities);
+        progress.check(Phase::Ordering, 0.8)?;
         report.priority_changes = stats.priority_changes;
         report.reversals = stats.reversals_done;
         report.reversals_refused = stats.reversals_refused;
@@ -200,6 +202,7 @@ pub fn step_coat(
     if verify {
         watch_other_parts(coat, dressing, &mut step.suspects, &mut step.body_ids);
     }
+    progress.check(Phase::Adjusting, 0.0)?;
     let steps = if dressing.config.mode == Mode::Legacy { AdjustSteps::FinePitchOnly } else { AdjustSteps::Full };
     let stats = if n == 0 {
         AdjustStats::default()

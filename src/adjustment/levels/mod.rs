@@ -26,6 +26,7 @@ use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triang
 use crate::geometry::RootFrame;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
@@ -273,7 +274,10 @@ impl Adjuster {
             ),
             Selection::All => {}
         }
-        self.posed_triangles(frames, shapes, poses);
+        self.posed_triangles(frames, shapes, poses, keep_going);
+        if !keep_going(0.0) {
+            return None;
+        }
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
@@ -371,6 +375,9 @@ impl Adjuster {
             return Some(stats);
         }
         self.mark_scope(order, rank, candidates, selection);
+        if !keep_going(0.0) {
+            return None;
+        }
         stats.levels = self.assign_levels(order, rank, candidates);
         let levels = stats.levels;
         for l in 0..levels {
@@ -535,16 +542,31 @@ impl Adjuster {
     }
 
     /// Every feather's triangles at its current pose, and their spheres.
-    fn posed_triangles(&mut self, frames: &[RootFrame], shapes: &[FeatherShape], poses: &[FeatherPose]) {
+    /// Every feather's triangles, bounding sphere and obstacle boxes at its
+    /// pose; once `keep_going` says stop the rest are left (the run is
+    /// abandoned).
+    fn posed_triangles(
+        &mut self,
+        frames: &[RootFrame],
+        shapes: &[FeatherShape],
+        poses: &[FeatherPose],
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
+    ) {
         self.triangles.resize(frames.len(), FeatherTriangles::kite([[Vec3::ZERO; 3]; 2]));
         self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
         self.boxes.resize(frames.len(), unset);
+        let stopped = AtomicBool::new(false);
         self.triangles
             .par_iter_mut()
             .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut()))
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
-            .for_each(|((t, (sphere, boxes)), (f, (s, p)))| {
+            .enumerate()
+            .for_each(|(k, ((t, (sphere, boxes)), (f, (s, p))))| {
+                if stopped.load(Ordering::Relaxed) || (k % 64 == 0 && !keep_going(0.0)) {
+                    stopped.store(true, Ordering::Relaxed);
+                    return;
+                }
                 *t = feather_triangles(f, s, *p);
                 *sphere = bounding_sphere(t);
                 *boxes = ObstacleBoxes::new(t, s.thickness);

@@ -113,11 +113,28 @@ impl Neighbourhoods {
     /// If `reach` is neither empty nor as long as `frames`, or there are more
     /// than `u32::MAX` roots.
     pub fn rebuild(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+        let built = self.rebuild_until(frames, reach, params, &|| true);
+        debug_assert!(built);
+    }
+
+    /// As [`Neighbourhoods::rebuild`], asking `keep_going` between leaves;
+    /// once it says stop, returns `false` with the rows half built (the
+    /// caller abandons them: it restores the neighbourhoods it had).
+    pub fn rebuild_until(
+        &mut self,
+        frames: &[RootFrame],
+        reach: &[f32],
+        params: &NeighbourParams,
+        keep_going: &(dyn Fn() -> bool + Sync),
+    ) -> bool {
         assert!(u32::try_from(frames.len()).is_ok(), "too many roots for u32 indices");
         assert!(reach.is_empty() || reach.len() == frames.len(), "reach must be empty or one length per root");
         self.tree_current = false;
-        self.rebuild_rows(frames, reach, params);
+        if !self.rebuild_rows(frames, reach, params, keep_going) {
+            return false;
+        }
         self.rebuild_pairs(frames.len());
+        true
     }
 
     /// A new leaf layout from a k-d tree over the current positions.
@@ -255,7 +272,13 @@ impl Neighbourhoods {
     /// roots; only the other roots (none on a closed coat) query the tree.
     /// Both ways rank candidates by the same `(|r_j − r_i|², j)`, so the
     /// rows are those of the tree alone.
-    fn rebuild_rows(&mut self, frames: &[RootFrame], reach: &[f32], params: &NeighbourParams) {
+    fn rebuild_rows(
+        &mut self,
+        frames: &[RootFrame],
+        reach: &[f32],
+        params: &NeighbourParams,
+        keep_going: &(dyn Fn() -> bool + Sync),
+    ) -> bool {
         let n = frames.len();
         let fresh = self.layout_generation == 0 || self.layout_roots != n;
         if fresh {
@@ -296,12 +319,16 @@ impl Neighbourhoods {
             nodes: &self.nodes,
             tree: self.tree_current.then_some(&self.tree),
             generation: self.layout_generation,
+            keep_going,
         };
         self.chunks[..chunks].par_iter_mut().enumerate().for_each(|(c, chunk)| {
             let first = (c * per_chunk).min(leaves);
             let last = ((c + 1) * per_chunk).min(leaves);
             ctx.fill(first..last, chunk);
         });
+        if !keep_going() {
+            return false;
+        }
         // The k nearest the rows could not settle, with a tree over the
         // current positions (the layout's tree is stale).
         if self.chunks[..chunks].iter().any(|c| !c.deferred.is_empty()) {
@@ -342,5 +369,6 @@ impl Neighbourhoods {
                 knn_at += knn_len;
             }
         }
+        true
     }
 }

@@ -21,6 +21,9 @@ pub(super) struct RowContext<'a> {
     pub(super) tree: Option<&'a KdTree>,
     /// The layout's generation (a chunk's cached unions are valid for it).
     pub(super) generation: u64,
+    /// Asked every few leaves; once it says stop, the chunk is left half
+    /// filled (the caller abandons the rows).
+    pub(super) keep_going: &'a (dyn Fn() -> bool + Sync),
 }
 
 impl RowContext<'_> {
@@ -44,6 +47,11 @@ impl RowContext<'_> {
             out.cached.resize_with(leaves.len(), CachedLeaf::default);
         }
         for (local, a) in leaves.clone().enumerate() {
+            if local % 4 == 3 && !(self.keep_going)() {
+                // Not reusable: the cache marks below are not reached.
+                out.cache_generation = 0;
+                return;
+            }
             // The leaves within reach of leaf a (a included).
             out.near.clear();
             if !self.reach.is_empty() {
