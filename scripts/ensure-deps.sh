@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Makes sure the build tools are present: cargo (must already be installed),
 # cmake, g++, pkg-config, Debian's libtinygltf-dev and glslang-tools (and
-# clang when it can). Installs the missing
+# clang, chromium, nodejs and npm when it can). Installs the missing
 # Debian packages when run as root with apt-get; otherwise stops and prints
 # the exact command to run.
 set -euo pipefail
@@ -32,6 +32,14 @@ fi
 # optional: without it that step is a counted skip.
 if ! command -v clang++ >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   missing+=(clang)
+fi
+
+# Headless Chromium, node and npm run the render test (scripts/render_test.sh,
+# viewer/); optional: without them that test is a counted skip.
+if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  command -v node >/dev/null 2>&1 || missing+=(nodejs)
+  command -v npm >/dev/null 2>&1 || missing+=(npm)
+  command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || missing+=(chromium)
 fi
 
 if [ ${#missing[@]} -gt 0 ]; then
