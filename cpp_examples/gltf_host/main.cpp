@@ -4,6 +4,7 @@
 #include "gltf_loader.h"
 #include "gltf_scene.h"
 #include "gltf_writer.h"
+#include "instance_writer.h"
 #include "memory_usage.h"
 #include "mesh_union.h"
 #include "options.h"
@@ -217,6 +218,10 @@ public:
         if (!opt_.poses.empty()) {
             poses_ = std::make_unique<PoseWriter>(opt_.poses, cfg, opt_.fps, subject_->rest_positions(), subject_->triangles(), times_, maps_);
         }
+        if (!opt_.instances.empty()) {
+            instances_.emplace(opt_.instances, *sys_, subject_->rest_positions(), subject_->triangles());
+            instances_->add_frame(*sys_, -1.0, subject_->rest_positions(), true);
+        }
         if (!opt_.out.empty()) {
             recorder_.emplace(subject_->rest_positions(), subject_->triangles(), feathers(*sys_), feather_mesh(*sys_));
             if (several()) {
@@ -243,6 +248,7 @@ public:
             const std::optional<PlumageValidation> v = validate_frame(opt_.validate, k, times_.size()) ? validate(*sys_) : std::nullopt;
             if (recorder_) recorder_->add_frame(times_[k], pose, feathers(*sys_), feather_mesh(*sys_));
             if (poses_) poses_->add_frame(pose);
+            if (instances_) instances_->add_frame(*sys_, times_[k], pose, k + 1 == times_.size());
             report_.add_frame(k, times_[k], step_seconds, frame_stats(*sys_), v, memory_usage(sys_.get()));
             for (size_t p = 0; several() && p < parts_.size(); ++p) {
                 const MeshPart& part = parts_[p];
@@ -281,6 +287,10 @@ public:
             poses_->finish();
             std::printf("plumage_gltf: wrote %s\n", opt_.poses.c_str());
         }
+        if (instances_) {
+            instances_->finish();
+            std::printf("plumage_gltf: wrote %s\n", instances_->dir().c_str());
+        }
         if (!opt_.report.empty()) {
             report_.set_timing("total_seconds", total_.seconds());
             report_.write(opt_.report);
@@ -305,6 +315,7 @@ private:
     size_t feather_count_ = 0;
     std::optional<AnimationRecorder> recorder_;
     std::unique_ptr<PoseWriter> poses_;
+    std::optional<InstanceWriter> instances_;
     double step_total_ = 0;
 };
 

@@ -99,7 +99,7 @@ uint32_t parse_choice(const std::string& option, const std::string& text, const 
 
 bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
-                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--memory-limit",  "--validate", "--out", "--report", "--poses",
+                                           "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--memory-limit",  "--validate", "--out", "--report", "--poses", "--instances",
                                            "--model-resolution", "--drift-tolerance", "--settle-rate", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
                                            "--spacing-map", "--length-map", "--width-map", "--flow-map"};
     for (const char* o : kOptions) {
@@ -172,6 +172,10 @@ std::string usage_text() {
            "  --report FILE.json   write the machine-readable report\n"
            "  --poses FILE         write the library's input (rest mesh, config, maps, every frame's positions)\n"
            "                       for `python -m plumage dress` (format in gltf_host/pose_writer.h)\n"
+           "  --instances DIR      write what a renderer draws instanced feathers from (viewer/): the template card,\n"
+           "                       each frame's 36-byte records, changed-feather list and body positions, and the\n"
+           "                       copied-out feathers of the rest pose and the last frame (format in\n"
+           "                       gltf_host/instance_writer.h)\n"
            "  --version, --help\n"
            "exit codes: 0 success, 1 output not written, 2 usage error, 3 unreadable or unsupported input,\n"
            "            4 library error\n";
@@ -244,7 +248,8 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
         else if (arg == "--poses") o.poses = value;
-        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
+        else if (arg == "--instances") o.instances = value;
+        if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--instances" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
     for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map}) {

@@ -55,6 +55,7 @@ struct Options {
     std::string out;
     std::string report;
     std::string poses;  // --poses FILE: the rest mesh, config, maps and frames handed to the library
+    std::string instances;  // --instances DIR: records, changed lists and the card for a renderer (viewer/)
     bool help = false;
     bool version = false;
 };

@@ -1,5 +1,6 @@
 #include "plumage_system.h"
 
+#include <algorithm>
 #include <type_traits>
 
 namespace plumage_host {
@@ -101,6 +102,45 @@ FeatherMeshData feather_mesh(const PlumageSystem& sys) {
     g.placed = m.placed.data(), g.placed_capacity = m.placed.size();
     check(plumage_system_feather_geometry(&sys, &g), &sys, "plumage_system_feather_geometry");
     return m;
+}
+
+std::vector<PlumageFeatherInstance> feather_instances(const PlumageSystem& sys) {
+    return copy_out(&plumage_system_feather_instances, sys, "plumage_system_feather_instances");
+}
+
+FeatherCard feather_template(const PlumageSystem& sys) {
+    PlumageFeatherTemplate t;
+    plumage_feather_template_init(&t);
+    check(plumage_system_feather_template(&sys, &t), &sys, "plumage_system_feather_template");
+    FeatherCard c;
+    c.segments = t.segments;
+    c.vane_split = t.vane_split;
+    c.positions.resize(3 * static_cast<size_t>(t.vertex_count));
+    c.uvs.resize(2 * static_cast<size_t>(t.vertex_count));
+    c.vertex_segments.resize(t.vertex_count);
+    c.indices.resize(3 * static_cast<size_t>(t.triangle_count));
+    t.positions = c.positions.data(), t.positions_capacity = c.positions.size();
+    t.uvs = c.uvs.data(), t.uvs_capacity = c.uvs.size();
+    t.vertex_segments = c.vertex_segments.data(), t.vertex_segments_capacity = c.vertex_segments.size();
+    t.indices = c.indices.data(), t.indices_capacity = c.indices.size();
+    check(plumage_system_feather_template(&sys, &t), &sys, "plumage_system_feather_template");
+    return c;
+}
+
+ChangedFeathers changed_feathers(const PlumageSystem& sys) {
+    ChangedFeathers c;
+    size_t need = 0;
+    uint32_t all = 0;
+    const uint32_t status = plumage_system_changed_feathers(&sys, nullptr, 0, &need, &all);
+    if (status != PLUMAGE_STATUS_OK && status != PLUMAGE_STATUS_BUFFER_TOO_SMALL) check(status, &sys, "plumage_system_changed_feathers");
+    c.indices.resize(need);
+    if (need > 0) {
+        size_t got = 0;
+        check(plumage_system_changed_feathers(&sys, c.indices.data(), c.indices.size(), &got, &all), &sys, "plumage_system_changed_feathers");
+        c.indices.resize(std::min(got, need));
+    }
+    c.all = all != 0;
+    return c;
 }
 
 std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys) {

@@ -66,6 +66,28 @@ struct FeatherMeshData {
 };
 FeatherMeshData feather_mesh(const PlumageSystem& sys);
 
+// One PlumageFeatherInstance per feather, in the order of feathers().
+std::vector<PlumageFeatherInstance> feather_instances(const PlumageSystem& sys);
+
+// The template card every record places (plumage_system_feather_template).
+struct FeatherCard {
+    uint32_t segments = 0;
+    float vane_split = 0;
+    std::vector<float> positions;           // xyz per vertex, unit length and width
+    std::vector<float> uvs;                 // (u, v) per vertex
+    std::vector<uint32_t> vertex_segments;  // the shaft segment carrying each vertex
+    std::vector<uint32_t> indices;          // three per triangle
+};
+FeatherCard feather_template(const PlumageSystem& sys);
+
+// The feathers the last call may have changed (increasing), and whether
+// that is every feather (after create, a load or a seek that loaded).
+struct ChangedFeathers {
+    std::vector<uint32_t> indices;
+    bool all = false;
+};
+ChangedFeathers changed_feathers(const PlumageSystem& sys);
+
 // Figures the library has computed; std::nullopt when it answers NOT_AVAILABLE.
 std::optional<PlumageSamplingStats> sampling_stats(const PlumageSystem& sys);
 std::optional<PlumageOrderingStats> ordering_stats(const PlumageSystem& sys);

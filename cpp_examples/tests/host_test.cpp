@@ -646,6 +646,45 @@ int poses() {
     return 0;
 }
 
+// --instances DIR: the manifest and every file it names, sized as it says.
+int instances() {
+    const std::string dir = path("instances");
+    std::filesystem::remove_all(dir);
+    const Run r = run_host({"--model-resolution", "20,16", "--frames", "2", "--feathers", "300", "--validate", "none", "--instances", dir});
+    CHECK_MSG(r.exit_code == 0, r.err);
+    CHECK(r.out.find("wrote " + dir) != std::string::npos);
+    json m;
+    try {
+        m = json::parse(slurp(dir + "/manifest.json"));
+    } catch (const std::exception& e) {
+        CHECK_MSG(false, e.what());
+        return 0;
+    }
+    const auto size = [&](const json& name) { return std::filesystem::file_size(dir + "/" + name.get<std::string>()); };
+    const size_t n = m.value("feathers", size_t{0}), V = m["template"].value("vertices", size_t{0}), T = m["template"].value("triangles", size_t{0});
+    const size_t nv = m["body"].value("vertices", size_t{0});
+    CHECK(m.value("format", "") == "plumage-instances" && m.value("version", 0) == 1 && m.value("record_bytes", 0) == 36);
+    CHECK(n > 200 && V == 13 && T == 14 && m["template"].value("segments", 0) == 4);
+    CHECK(m["body"].value("triangles", size_t{0}) == 2 * 16 * 18 && nv > 0);
+    CHECK(m["record_layout"]["bends"].value("offset", 0) == 28 && m["record_layout"]["rotation"].value("type", "") == "int16");
+    CHECK(size(m["template"]["file"]) == V * (12 + 8 + 4) + T * 12);
+    CHECK(size(m["body"]["indices"]) == 2 * 16 * 18 * 12);
+    CHECK(m["frames"].size() == 3);
+    for (const json& f : m["frames"]) {
+        const size_t k = f.value("index", size_t{99});
+        CHECK(size(f["records"]) == 36 * n && size(f["body"]) == 12 * nv);
+        CHECK(size(f["changed"]) == 4 * f.value("changed_count", size_t{0}));
+        CHECK(f.value("all", false) == (k == 0) && (k != 0 || f.value("changed_count", size_t{0}) == n));
+        CHECK(f.contains("geometry") == (k == 0 || k == 2));
+        if (f.contains("geometry")) CHECK(size(f["geometry"]) == n * V * 32 + n * T * 12);
+        CHECK(k == 0 ? f["time"].is_null() : f["time"].is_number());
+    }
+    std::ofstream(path("plain_file")) << "x";  // a file where a directory should be
+    EXPECT_REFUSAL(run_host({"--frames", "1", "--instances", path("plain_file") + "/dir"}), 1, "cannot create directory");
+    EXPECT_REFUSAL(run_host({"--frames", "1", "--instances="}), 2, "--instances: empty value");
+    return 0;
+}
+
 int help() {
     const Run r = run_host({"--help"});
     CHECK(r.exit_code == 0 && r.out.find("usage: plumage_gltf") != std::string::npos && r.err.empty());
@@ -677,6 +716,7 @@ const std::map<std::string, std::function<int()>> kScenarios = {
     {"library_error", library_error},
     {"help", help},
     {"poses", poses},
+    {"instances", instances},
 };
 
 }  // namespace
