@@ -10,6 +10,7 @@ use super::grid::StaticGrid;
 use crate::field::Fields;
 use crate::geometry::{RootFrame, SurfacePoint};
 use crate::interior::{BuriedSkin, FaceBurial};
+use crate::progress::{Phase, Progress};
 use crate::rng::hash64;
 use crate::roots::{RootBinding, RootNormal, pose_roots};
 use crate::surface::{NearbyPatch, Surface};
@@ -58,18 +59,28 @@ fn same_side(a: Vec3, b: Vec3) -> bool {
     a.dot(b) > 0.0
 }
 
-/// Computes the figures for `roots` on `surface` at the pose `positions`
-/// (normally the rest pose). `spacing` is the global `d` the roots were
-/// sampled with and `theta` the stagger angle the alignment is measured
+/// What the roots were planted for: the global spacing `d` they were
+/// sampled with and the stagger angle `theta` the alignment is measured
 /// against.
+#[derive(Clone, Copy, Debug)]
+pub struct PlantedFor {
+    /// The global spacing `d`.
+    pub spacing: f32,
+    /// The stagger angle, radians.
+    pub theta: f32,
+}
+
+/// Computes the figures for `roots` on `surface` at the pose `positions`
+/// (normally the rest pose), polling `progress` (stopped, the figures are
+/// partial and the caller's next check fails).
 pub fn sampling_metrics(
     surface: &Surface,
     positions: &[Vec3],
     fields: &Fields,
     buried: &BuriedSkin,
     roots: &[RootBinding],
-    spacing: f32,
-    theta: f32,
+    PlantedFor { spacing, theta }: PlantedFor,
+    progress: &Progress,
 ) -> SamplingMetrics {
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
@@ -79,8 +90,18 @@ pub fn sampling_metrics(
     let cell = 1.5 * spacing.max(f32::MIN_POSITIVE) * fields.median_spacing_scale();
     let grid = StaticGrid::new(&frames.iter().map(|f| f.position).collect::<Vec<_>>(), cell);
 
-    let per_root: Vec<(f32, f64, u32)> =
-        (0..roots.len()).into_par_iter().map(|i| root_figures(&grid, &frames, roots, i, theta)).collect();
+    // Polled per root and per face: once stopped, the rest give nothing and
+    // the caller's next check fails (the figures are dropped).
+    let per_root: Vec<(f32, f64, u32)> = (0..roots.len())
+        .into_par_iter()
+        .map(|i| {
+            if progress.poll(Phase::Sampling, 0.97, i) {
+                root_figures(&grid, &frames, roots, i, theta)
+            } else {
+                (RADIUS_CAP, 0.0, 0)
+            }
+        })
+        .collect();
     let relative_radius = per_root.iter().map(|r| r.0).fold(RADIUS_CAP, f32::min);
     let (sum, count) = per_root.iter().fold((0.0f64, 0u64), |(s, c), r| (s + r.1, c + r.2 as u64));
     let alignment = if count > 0 { (sum / count as f64) as f32 } else { 0.0 };
@@ -98,7 +119,12 @@ pub fn sampling_metrics(
     };
     let per_face: Vec<(f32, usize)> = (0..surface.face_count())
         .into_par_iter()
-        .map_init(|| (NearbyPatch::new(surface), Vec::new()), |(patch, near), f| coverage.face(patch, near, f))
+        .map_init(
+            || (NearbyPatch::new(surface), Vec::new()),
+            |(patch, near), f| {
+                if progress.poll(Phase::Sampling, 0.98, f) { coverage.face(patch, near, f) } else { (0.0, 0) }
+            },
+        )
         .collect();
     let coverage_gap = per_face.iter().map(|r| r.0).fold(0.0, f32::max);
     let probes = per_face.iter().map(|r| r.1).sum();

@@ -24,7 +24,7 @@ pub mod metrics;
 mod pool;
 mod random;
 
-pub use metrics::{SamplingMetrics, sampling_metrics};
+pub use metrics::{PlantedFor, SamplingMetrics, sampling_metrics};
 
 use crate::config::{Config, SamplerKind};
 use crate::error::{Error, ErrorKind, Result};
@@ -105,7 +105,7 @@ pub fn sample_roots_with_progress(
     progress: &Progress,
 ) -> Result<Sampling> {
     let planted = plant_roots_with_progress(mesh, surface, fields, config, progress)?;
-    let metrics = planted.metrics(surface, &mesh.positions, fields, &planted.roots, config.theta)?;
+    let metrics = planted.metrics(surface, &mesh.positions, fields, &planted.roots, config.theta, progress)?;
     let Planted { roots, spacing, seconds, passes, first_pass_roots, .. } = planted;
     Ok(Sampling { roots, spacing, metrics, seconds, passes, first_pass_roots })
 }
@@ -139,8 +139,11 @@ impl Planted {
         fields: &Fields,
         roots: &[RootBinding],
         theta: f32,
+        progress: &Progress,
     ) -> Result<SamplingMetrics> {
-        let metrics = sampling_metrics(surface, positions, fields, &self.buried, roots, self.spacing, theta);
+        let planted_for = PlantedFor { spacing: self.spacing, theta };
+        let metrics = sampling_metrics(surface, positions, fields, &self.buried, roots, planted_for, progress);
+        progress.check(Phase::Sampling, 1.0)?;
         // Probes judged after the burial budget ran out were taken as visible.
         self.buried.within_budget()?;
         Ok(metrics)
@@ -166,7 +169,7 @@ pub fn plant_roots_with_progress(
     let positions = &mesh.positions;
     let mut normals = Vec::new();
     surface.vertex_normals(positions, &mut normals);
-    let buried = BuriedSkin::new(positions, &mesh.triangles, target_feathers(config))?;
+    let buried = BuriedSkin::new(positions, &mesh.triangles, roots_aimed(surface, config))?;
     progress.check(Phase::Sampling, 0.0)?;
     let density = DensityField::new(surface, fields, positions, &normals, &buried);
     let target = target_feathers(config);
@@ -235,6 +238,23 @@ fn check_spacing_estimate(effective_area: f64, config: &Config) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// About how many roots `config` asks for: with a spacing, the rest area
+/// over the area a root takes (at most the feather limit), else the target
+/// count. Sizes the burial budget before the density (which needs the
+/// burial) exists.
+fn roots_aimed(surface: &Surface, config: &Config) -> usize {
+    if config.spacing <= 0.0 {
+        return target_feathers(config);
+    }
+    let packing = match config.sampler {
+        SamplerKind::Guided => GUIDED_PACKING,
+        SamplerKind::Random => RANDOM_PACKING,
+    };
+    let d = f64::from(config.spacing);
+    let estimate = surface.rest_area() / (packing * d * d);
+    if estimate.is_finite() { estimate.clamp(1.0, crate::limits::MAX_FEATHERS as f64) as usize } else { 1 }
 }
 
 /// The feather count aimed at: `config.target_feathers`, or the default

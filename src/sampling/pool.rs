@@ -134,7 +134,7 @@ impl<'a> DensityField<'a> {
             return Vec::new();
         }
         let blocks = count.div_ceil(POOL_BLOCK);
-        let memo = self.burial_memo(count, total);
+        let memo = self.burial_memo(count, total, keep_going);
         let faces = FaceLookup::new(&self.cdf);
         let parts: Vec<Vec<PoolPoint>> = (0..blocks)
             .into_par_iter()
@@ -144,7 +144,7 @@ impl<'a> DensityField<'a> {
                 }
                 let wanted = POOL_BLOCK.min(count - b * POOL_BLOCK);
                 let mut rng = Rng::for_stream(seed ^ POOL_STREAM, b as u64);
-                self.draw_block(&mut rng, d, wanted, total, &memo, &faces)
+                self.draw_block(&mut rng, d, wanted, total, Lookups { memo: &memo, faces: &faces, keep_going })
             })
             .collect();
         parts.concat()
@@ -152,7 +152,7 @@ impl<'a> DensityField<'a> {
 
     /// The burial of every cell of the crossed faces that expect many pool
     /// points (see [`BurialMemo`]), decided at the cells' centres.
-    fn burial_memo(&self, count: usize, total: f64) -> BurialMemo {
+    fn burial_memo(&self, count: usize, total: f64, keep_going: &(dyn Fn() -> bool + Sync)) -> BurialMemo {
         let cells = MEMO_CELLS * MEMO_CELLS;
         let mut start = vec![u32::MAX; self.cdf.len()];
         let mut faces = Vec::new();
@@ -171,6 +171,10 @@ impl<'a> DensityField<'a> {
             .par_iter()
             .flat_map_iter(|&f| (0..cells).map(move |c| (f, c)))
             .map(|(f, c)| {
+                // Stopped: the rest are left visible (the pass is dropped).
+                if !keep_going() {
+                    return false;
+                }
                 let point = SurfacePoint { face: f as u32, bary: memo_cell_centre(c) };
                 let position = self.surface.position(self.positions, point);
                 let normal = self.surface.interpolated_normal(self.positions, self.normals, point);
@@ -186,12 +190,16 @@ impl<'a> DensityField<'a> {
         d: f32,
         wanted: usize,
         total: f64,
-        memo: &BurialMemo,
-        faces: &FaceLookup<'_>,
+        Lookups { memo, faces, keep_going }: Lookups<'_>,
     ) -> Vec<PoolPoint> {
         let mut out = Vec::with_capacity(wanted);
         let mut attempts = 0usize;
         while out.len() < wanted && attempts < 64 * wanted {
+            // A block holds thousands of draws, each maybe with burial rays:
+            // stopped, the block ends short (the pass is then dropped).
+            if attempts % 64 == 63 && !keep_going() {
+                break;
+            }
             attempts += 1;
             let u = rng.next_f64() * total;
             let face = faces.first_above(u).min(self.cdf.len() - 1);
@@ -220,6 +228,15 @@ impl<'a> DensityField<'a> {
         }
         out
     }
+}
+
+/// What every block of a pool reads besides the density: the burial memo,
+/// the face lookup, and whether to go on.
+#[derive(Clone, Copy)]
+struct Lookups<'a> {
+    memo: &'a BurialMemo,
+    faces: &'a FaceLookup<'a>,
+    keep_going: &'a (dyn Fn() -> bool + Sync),
 }
 
 /// `cdf.partition_point(|&c| c <= u)` over a non-decreasing `cdf`, found

@@ -152,7 +152,7 @@ impl System {
         // other.
         let metrics = pool.install(|| {
             crate::frame::solve_beside(coat, dressing, &rest, work, progress, || {
-                planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta)
+                planted.metrics(&dressing.surface, &rest, &fields, &dressing.roots, config.theta, progress)
             })
         })??;
         sampling.relative_radius = metrics.relative_radius;
