@@ -553,6 +553,12 @@ typedef struct PlumageConfig {
 } PlumageConfig;
 
 /**
+ * What every call that can fail returns: `PLUMAGE_STATUS_OK` (0) or one
+ * of the other `PLUMAGE_STATUS_*` values (`plumage_status_name` names it).
+ */
+typedef uint32_t PlumageStatus;
+
+/**
  * A mesh handed to `plumage_system_create`, in the caller's own numbering.
  * Triangle soups (vertices split along UV or normal seams) are welded by
  * position internally. Fill with `plumage_mesh_desc_init` first.
@@ -1281,7 +1287,7 @@ void plumage_config_init(struct PlumageConfig *cfg);
  * # Safety
  * `cfg` is NULL or points to writable memory for one `PlumageConfig`.
  */
-uint32_t plumage_config_init_preset(struct PlumageConfig *cfg, uint32_t preset);
+PlumageStatus plumage_config_init_preset(struct PlumageConfig *cfg, uint32_t preset);
 
 /**
  * Sets every pointer of `mesh` to NULL, every count to 0 and sets
@@ -1362,9 +1368,9 @@ void plumage_part_stats_init(struct PlumagePartStats *out);
  * may be called during any later call on the system, until destroy
  * returns OK: they must stay valid that long.
  */
-uint32_t plumage_system_create(const struct PlumageConfig *cfg,
-                               const struct PlumageMeshDesc *rest,
-                               struct PlumageSystem **out);
+PlumageStatus plumage_system_create(const struct PlumageConfig *cfg,
+                                    const struct PlumageMeshDesc *rest,
+                                    struct PlumageSystem **out);
 
 /**
  * Frees a system and everything it owns. NULL is a no-op (OK). Works on a
@@ -1376,7 +1382,7 @@ uint32_t plumage_system_create(const struct PlumageConfig *cfg,
  * after a call that returned OK. (The BUSY guard catches a call that
  * overlaps this one; a call made after the system is freed cannot be caught.)
  */
-uint32_t plumage_system_destroy(struct PlumageSystem *sys);
+PlumageStatus plumage_system_destroy(struct PlumageSystem *sys);
 
 /**
  * Advances the animation by one frame: `positions` holds xyz for each of
@@ -1388,9 +1394,9 @@ uint32_t plumage_system_destroy(struct PlumageSystem *sys);
  * thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
  * readable floats.
  */
-uint32_t plumage_system_step(struct PlumageSystem *sys,
-                             const float *positions,
-                             size_t vertex_count);
+PlumageStatus plumage_system_step(struct PlumageSystem *sys,
+                                  const float *positions,
+                                  size_t vertex_count);
 
 /**
  * Solves the pose given by `positions` from scratch, independent of the
@@ -1401,9 +1407,9 @@ uint32_t plumage_system_step(struct PlumageSystem *sys,
  * thread uses during the call. `positions` is NULL or holds `3 * vertex_count`
  * readable floats.
  */
-uint32_t plumage_system_evaluate(struct PlumageSystem *sys,
-                                 const float *positions,
-                                 size_t vertex_count);
+PlumageStatus plumage_system_evaluate(struct PlumageSystem *sys,
+                                      const float *positions,
+                                      size_t vertex_count);
 
 /**
  * Writes the number of feathers to `*out`.
@@ -1413,7 +1419,7 @@ uint32_t plumage_system_evaluate(struct PlumageSystem *sys,
  * may only make read-only (`const`) calls on it during the call. `out` is NULL
  * or points to a writable `size_t`.
  */
-uint32_t plumage_system_feather_count(const struct PlumageSystem *sys, size_t *out);
+PlumageStatus plumage_system_feather_count(const struct PlumageSystem *sys, size_t *out);
 
 /**
  * Writes the number of vertices every frame must provide (the rest mesh's
@@ -1424,7 +1430,7 @@ uint32_t plumage_system_feather_count(const struct PlumageSystem *sys, size_t *o
  * may only make read-only (`const`) calls on it during the call. `out` is NULL
  * or points to a writable `size_t`.
  */
-uint32_t plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *out);
+PlumageStatus plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *out);
 
 /**
  * Copies one `PlumageFeather` per feather into `buf` (`capacity` elements).
@@ -1437,10 +1443,10 @@ uint32_t plumage_system_vertex_count(const struct PlumageSystem *sys, size_t *ou
  * or holds `capacity` writable elements; `out_len` is NULL or points to a
  * writable `size_t`.
  */
-uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
-                                 struct PlumageFeather *buf,
-                                 size_t capacity,
-                                 size_t *out_len);
+PlumageStatus plumage_system_feathers(const struct PlumageSystem *sys,
+                                      struct PlumageFeather *buf,
+                                      size_t capacity,
+                                      size_t *out_len);
 
 /**
  * Copies the feathers' triangles as xyz floats, in the order of
@@ -1460,10 +1466,10 @@ uint32_t plumage_system_feathers(const struct PlumageSystem *sys,
  * or holds `capacity` writable floats; `out_len` is NULL or points to a
  * writable `size_t`.
  */
-uint32_t plumage_system_feather_triangles(const struct PlumageSystem *sys,
-                                          float *xyz,
-                                          size_t capacity,
-                                          size_t *out_len);
+PlumageStatus plumage_system_feather_triangles(const struct PlumageSystem *sys,
+                                               float *xyz,
+                                               size_t capacity,
+                                               size_t *out_len);
 
 /**
  * Fills `geometry` with NULL buffers, zero capacities and totals, and sets
@@ -1490,8 +1496,8 @@ void plumage_feather_geometry_init(struct PlumageFeatherGeometry *geometry);
  * are readable and writable and whose non-NULL buffers hold their stated
  * capacities of writable elements.
  */
-uint32_t plumage_system_feather_geometry(const struct PlumageSystem *sys,
-                                         struct PlumageFeatherGeometry *geometry);
+PlumageStatus plumage_system_feather_geometry(const struct PlumageSystem *sys,
+                                              struct PlumageFeatherGeometry *geometry);
 
 /**
  * Copies one `PlumageFeatherInstance` per feather into `buf` (`capacity`
@@ -1505,10 +1511,10 @@ uint32_t plumage_system_feather_geometry(const struct PlumageSystem *sys,
  * or holds `capacity` writable elements; `out_len` is NULL or points to a
  * writable `size_t`.
  */
-uint32_t plumage_system_feather_instances(const struct PlumageSystem *sys,
-                                          struct PlumageFeatherInstance *buf,
-                                          size_t capacity,
-                                          size_t *out_len);
+PlumageStatus plumage_system_feather_instances(const struct PlumageSystem *sys,
+                                               struct PlumageFeatherInstance *buf,
+                                               size_t capacity,
+                                               size_t *out_len);
 
 /**
  * Fills `card` with NULL buffers, zero capacities and counts, and sets
@@ -1535,8 +1541,8 @@ void plumage_feather_template_init(struct PlumageFeatherTemplate *card);
  * are readable and writable and whose non-NULL buffers hold their stated
  * capacities of writable elements.
  */
-uint32_t plumage_system_feather_template(const struct PlumageSystem *sys,
-                                         struct PlumageFeatherTemplate *card);
+PlumageStatus plumage_system_feather_template(const struct PlumageSystem *sys,
+                                              struct PlumageFeatherTemplate *card);
 
 /**
  * Copies the indices of the feathers whose record (and triangles) the
@@ -1563,11 +1569,11 @@ uint32_t plumage_system_feather_template(const struct PlumageSystem *sys,
  * points to a writable `size_t`; `out_all` is NULL or points to a writable
  * `uint32_t`.
  */
-uint32_t plumage_system_changed_feathers(const struct PlumageSystem *sys,
-                                         uint32_t *indices,
-                                         size_t capacity,
-                                         size_t *out_len,
-                                         uint32_t *out_all);
+PlumageStatus plumage_system_changed_feathers(const struct PlumageSystem *sys,
+                                              uint32_t *indices,
+                                              size_t capacity,
+                                              size_t *out_len,
+                                              uint32_t *out_all);
 
 /**
  * Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
@@ -1579,8 +1585,8 @@ uint32_t plumage_system_changed_feathers(const struct PlumageSystem *sys,
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_sampling_stats(const struct PlumageSystem *sys,
-                                       struct PlumageSamplingStats *out);
+PlumageStatus plumage_system_sampling_stats(const struct PlumageSystem *sys,
+                                            struct PlumageSamplingStats *out);
 
 /**
  * Static ordering figures. PLUMAGE_STATUS_NOT_AVAILABLE before any order exists.
@@ -1591,8 +1597,8 @@ uint32_t plumage_system_sampling_stats(const struct PlumageSystem *sys,
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
-                                       struct PlumageOrderingStats *out);
+PlumageStatus plumage_system_ordering_stats(const struct PlumageSystem *sys,
+                                            struct PlumageOrderingStats *out);
 
 /**
  * What the last successful create, step or evaluate did.
@@ -1604,7 +1610,8 @@ uint32_t plumage_system_ordering_stats(const struct PlumageSystem *sys,
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct PlumageFrameStats *out);
+PlumageStatus plumage_system_frame_stats(const struct PlumageSystem *sys,
+                                         struct PlumageFrameStats *out);
 
 /**
  * The heap bytes the system holds now, by part: what
@@ -1618,7 +1625,7 @@ uint32_t plumage_system_frame_stats(const struct PlumageSystem *sys, struct Plum
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_memory(const struct PlumageSystem *sys, struct PlumageMemory *out);
+PlumageStatus plumage_system_memory(const struct PlumageSystem *sys, struct PlumageMemory *out);
 
 /**
  * Runs the exact validation (triangle–triangle intersections, body
@@ -1634,7 +1641,8 @@ uint32_t plumage_system_memory(const struct PlumageSystem *sys, struct PlumageMe
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct PlumageValidation *out);
+PlumageStatus plumage_system_validate(const struct PlumageSystem *sys,
+                                      struct PlumageValidation *out);
 
 /**
  * `plumage_system_validate` restricted to a part of the mesh: the
@@ -1654,10 +1662,10 @@ uint32_t plumage_system_validate(const struct PlumageSystem *sys, struct Plumage
  * # Safety
  * As `plumage_system_validate`.
  */
-uint32_t plumage_system_validate_part(const struct PlumageSystem *sys,
-                                      size_t first_triangle,
-                                      size_t triangle_count,
-                                      struct PlumageValidation *out);
+PlumageStatus plumage_system_validate_part(const struct PlumageSystem *sys,
+                                           size_t first_triangle,
+                                           size_t triangle_count,
+                                           struct PlumageValidation *out);
 
 /**
  * The last create, step or evaluate's figures for the feathers rooted on
@@ -1672,10 +1680,10 @@ uint32_t plumage_system_validate_part(const struct PlumageSystem *sys,
  * or points to a struct whose `struct_size` is set and whose `struct_size`
  * bytes are writable.
  */
-uint32_t plumage_system_part_stats(const struct PlumageSystem *sys,
-                                   size_t first_triangle,
-                                   size_t triangle_count,
-                                   struct PlumagePartStats *out);
+PlumageStatus plumage_system_part_stats(const struct PlumageSystem *sys,
+                                        size_t first_triangle,
+                                        size_t triangle_count,
+                                        struct PlumagePartStats *out);
 
 /**
  * Saves the current frame (what the last successful create, step,
@@ -1695,10 +1703,10 @@ uint32_t plumage_system_part_stats(const struct PlumageSystem *sys,
  * or holds `capacity` writable bytes; `out_len` is NULL or points to a
  * writable `size_t`.
  */
-uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
-                                   uint8_t *buf,
-                                   size_t capacity,
-                                   size_t *out_len);
+PlumageStatus plumage_system_save_state(const struct PlumageSystem *sys,
+                                        uint8_t *buf,
+                                        size_t capacity,
+                                        size_t *out_len);
 
 /**
  * Resumes from a blob of `len` bytes written by
@@ -1714,7 +1722,7 @@ uint32_t plumage_system_save_state(const struct PlumageSystem *sys,
  * `sys` is NULL or a live handle from `plumage_system_create` that no other
  * thread uses during the call. `blob` is NULL or holds `len` readable bytes.
  */
-uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blob, size_t len);
+PlumageStatus plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blob, size_t len);
 
 /**
  * Scrubbing with keyframed checkpoints (`PlumageConfig.checkpoint_interval`
@@ -1736,7 +1744,9 @@ uint32_t plumage_system_load_state(struct PlumageSystem *sys, const uint8_t *blo
  * thread uses during the call. `out_from` is NULL or points to a writable
  * `uint64_t`.
  */
-uint32_t plumage_system_seek(struct PlumageSystem *sys, uint64_t frame_index, uint64_t *out_from);
+PlumageStatus plumage_system_seek(struct PlumageSystem *sys,
+                                  uint64_t frame_index,
+                                  uint64_t *out_from);
 
 /**
  * Copies the message of the most recent call on `sys` into `buf` (at most
@@ -1766,7 +1776,7 @@ size_t plumage_system_last_error(const struct PlumageSystem *sys, char *buf, siz
  * `sys` is NULL or a live handle from `plumage_system_create` that no other
  * thread uses during the call.
  */
-uint32_t plumage_testing_panic_on_next_call(struct PlumageSystem *sys);
+PlumageStatus plumage_testing_panic_on_next_call(struct PlumageSystem *sys);
 #endif
 
 #if defined(PLUMAGE_TEST_HOOKS)

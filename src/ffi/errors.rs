@@ -56,7 +56,7 @@ pub unsafe extern "C" fn plumage_system_last_error(
 /// thread uses during the call.
 #[cfg(feature = "test-hooks")]
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_testing_panic_on_next_call(sys: *mut PlumageSystem) -> u32 {
+pub unsafe extern "C" fn plumage_testing_panic_on_next_call(sys: *mut PlumageSystem) -> PlumageStatus {
     with_system(sys, |system, _| {
         system.arm_test_panic();
         Ok(())

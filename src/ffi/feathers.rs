@@ -165,7 +165,7 @@ impl PlumageFeatherGeometry {
 /// may only make read-only (`const`) calls on it during the call. `out` is NULL
 /// or points to a writable `size_t`.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
+pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem, out: *mut usize) -> PlumageStatus {
     with_system_ref(sys, |system| {
         if out.is_null() {
             return Err(Failure::null("out"));
@@ -184,7 +184,7 @@ pub unsafe extern "C" fn plumage_system_feather_count(sys: *const PlumageSystem,
 /// may only make read-only (`const`) calls on it during the call. `out` is NULL
 /// or points to a writable `size_t`.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_vertex_count(sys: *const PlumageSystem, out: *mut usize) -> u32 {
+pub unsafe extern "C" fn plumage_system_vertex_count(sys: *const PlumageSystem, out: *mut usize) -> PlumageStatus {
     with_system_ref(sys, |system| {
         if out.is_null() {
             return Err(Failure::null("out"));
@@ -210,7 +210,7 @@ pub unsafe extern "C" fn plumage_system_feathers(
     buf: *mut PlumageFeather,
     capacity: usize,
     out_len: *mut usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| {
         let records: Vec<PlumageFeather> = system.feathers().iter().map(PlumageFeather::from).collect();
         copy_out(&records, buf, capacity, out_len)
@@ -239,7 +239,7 @@ pub unsafe extern "C" fn plumage_system_feather_triangles(
     xyz: *mut f32,
     capacity: usize,
     out_len: *mut usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| copy_out(system.feather_triangles().as_flattened(), xyz, capacity, out_len))
 }
 
@@ -275,7 +275,7 @@ pub unsafe extern "C" fn plumage_feather_geometry_init(geometry: *mut PlumageFea
 pub unsafe extern "C" fn plumage_system_feather_geometry(
     sys: *const PlumageSystem,
     geometry: *mut PlumageFeatherGeometry,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| {
         if geometry.is_null() {
             return Err(Failure::null("geometry"));

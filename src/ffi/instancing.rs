@@ -7,6 +7,7 @@
 use super::boundary::{PlumageSystem, with_system_ref};
 use super::convention::{Failure, copy_out, read_versioned, write_versioned};
 use super::feathers::CallerBuffers;
+use super::status::PlumageStatus;
 use crate::feather::InstanceRecord;
 
 /// The bend that a `PlumageFeatherInstance.bends` value of 32767 stands
@@ -156,7 +157,7 @@ pub unsafe extern "C" fn plumage_system_feather_instances(
     buf: *mut PlumageFeatherInstance,
     capacity: usize,
     out_len: *mut usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| {
         let records: Vec<PlumageFeatherInstance> =
             system.feather_instances().iter().map(PlumageFeatherInstance::from).collect();
@@ -196,7 +197,7 @@ pub unsafe extern "C" fn plumage_feather_template_init(card: *mut PlumageFeather
 pub unsafe extern "C" fn plumage_system_feather_template(
     sys: *const PlumageSystem,
     card: *mut PlumageFeatherTemplate,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| {
         if card.is_null() {
             return Err(Failure::null("card"));
@@ -260,7 +261,7 @@ pub unsafe extern "C" fn plumage_system_changed_feathers(
     capacity: usize,
     out_len: *mut usize,
     out_all: *mut u32,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| {
         let changed = system.changed_feathers();
         copy_out(changed.indices, indices, capacity, out_len)?;

@@ -6,6 +6,7 @@ use super::boundary::{PlumageSystem, quietly, with_system, without_system};
 use super::config::{HostConfig, PlumageConfig, read_config};
 use super::convention::Failure;
 use super::mesh::{PlumageMeshDesc, checked_len, read_mesh};
+use super::status::PlumageStatus;
 use super::status::{PLUMAGE_STATUS_BUSY, PLUMAGE_STATUS_OK};
 
 /// Creates a system on the rest mesh `rest` with `cfg` (NULL = defaults).
@@ -27,7 +28,7 @@ pub unsafe extern "C" fn plumage_system_create(
     cfg: *const PlumageConfig,
     rest: *const PlumageMeshDesc,
     out: *mut *mut PlumageSystem,
-) -> u32 {
+) -> PlumageStatus {
     without_system(|| {
         if out.is_null() {
             return Err(Failure::null("out"));
@@ -58,7 +59,7 @@ pub unsafe extern "C" fn plumage_system_create(
 /// after a call that returned OK. (The BUSY guard catches a call that
 /// overlaps this one; a call made after the system is freed cannot be caught.)
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) -> u32 {
+pub unsafe extern "C" fn plumage_system_destroy(sys: *mut PlumageSystem) -> PlumageStatus {
     if sys.is_null() {
         return PLUMAGE_STATUS_OK;
     }
@@ -90,7 +91,7 @@ pub unsafe extern "C" fn plumage_system_step(
     sys: *mut PlumageSystem,
     positions: *const f32,
     vertex_count: usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system(sys, |system, progress| {
         // SAFETY: forwarded contract.
         let frame = unsafe { frame_positions(positions, vertex_count) }?;
@@ -111,7 +112,7 @@ pub unsafe extern "C" fn plumage_system_evaluate(
     sys: *mut PlumageSystem,
     positions: *const f32,
     vertex_count: usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system(sys, |system, progress| {
         // SAFETY: forwarded contract.
         let frame = unsafe { frame_positions(positions, vertex_count) }?;

@@ -119,7 +119,7 @@ pub unsafe extern "C" fn plumage_config_init(cfg: *mut PlumageConfig) {
 /// # Safety
 /// `cfg` is NULL or points to writable memory for one `PlumageConfig`.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, preset: u32) -> u32 {
+pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, preset: u32) -> PlumageStatus {
     without_system(|| {
         if cfg.is_null() {
             return Err(Failure::null("cfg"));

@@ -27,7 +27,7 @@ pub unsafe extern "C" fn plumage_system_save_state(
     buf: *mut u8,
     capacity: usize,
     out_len: *mut usize,
-) -> u32 {
+) -> PlumageStatus {
     with_system_ref(sys, |system| copy_out(&system.save_state(), buf, capacity, out_len))
 }
 
@@ -44,7 +44,11 @@ pub unsafe extern "C" fn plumage_system_save_state(
 /// `sys` is NULL or a live handle from `plumage_system_create` that no other
 /// thread uses during the call. `blob` is NULL or holds `len` readable bytes.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_load_state(sys: *mut PlumageSystem, blob: *const u8, len: usize) -> u32 {
+pub unsafe extern "C" fn plumage_system_load_state(
+    sys: *mut PlumageSystem,
+    blob: *const u8,
+    len: usize,
+) -> PlumageStatus {
     with_system(sys, |system, _| {
         if blob.is_null() {
             return Err(Failure::null("blob"));
@@ -78,7 +82,11 @@ pub unsafe extern "C" fn plumage_system_load_state(sys: *mut PlumageSystem, blob
 /// thread uses during the call. `out_from` is NULL or points to a writable
 /// `uint64_t`.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_seek(sys: *mut PlumageSystem, frame_index: u64, out_from: *mut u64) -> u32 {
+pub unsafe extern "C" fn plumage_system_seek(
+    sys: *mut PlumageSystem,
+    frame_index: u64,
+    out_from: *mut u64,
+) -> PlumageStatus {
     with_system(sys, |system, _| {
         if out_from.is_null() {
             return Err(Failure::null("out_from"));

@@ -5,6 +5,7 @@
 
 use super::boundary::{PlumageSystem, figures_out};
 use super::convention::Failure;
+use super::status::PlumageStatus;
 
 /// Sampling quality figures (`plumage_system_sampling_stats`). Fill
 /// with `plumage_sampling_stats_init` (or set `struct_size = sizeof(PlumageSamplingStats)`)
@@ -149,7 +150,7 @@ const _: () = {
 pub unsafe extern "C" fn plumage_system_sampling_stats(
     sys: *const PlumageSystem,
     out: *mut PlumageSamplingStats,
-) -> u32 {
+) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, std::mem::size_of::<PlumageSamplingStats>(), "PlumageSamplingStats", |system| {
@@ -178,7 +179,7 @@ pub unsafe extern "C" fn plumage_system_sampling_stats(
 pub unsafe extern "C" fn plumage_system_ordering_stats(
     sys: *const PlumageSystem,
     out: *mut PlumageOrderingStats,
-) -> u32 {
+) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, std::mem::size_of::<PlumageOrderingStats>(), "PlumageOrderingStats", |system| {
@@ -205,7 +206,10 @@ pub unsafe extern "C" fn plumage_system_ordering_stats(
 /// or points to a struct whose `struct_size` is set and whose `struct_size`
 /// bytes are writable.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_frame_stats(sys: *const PlumageSystem, out: *mut PlumageFrameStats) -> u32 {
+pub unsafe extern "C" fn plumage_system_frame_stats(
+    sys: *const PlumageSystem,
+    out: *mut PlumageFrameStats,
+) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, FRAME_STATS_V1_SIZE, "PlumageFrameStats", |system| {
@@ -279,7 +283,7 @@ pub struct PlumageMemory {
 /// or points to a struct whose `struct_size` is set and whose `struct_size`
 /// bytes are writable.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_memory(sys: *const PlumageSystem, out: *mut PlumageMemory) -> u32 {
+pub unsafe extern "C" fn plumage_system_memory(sys: *const PlumageSystem, out: *mut PlumageMemory) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, std::mem::size_of::<PlumageMemory>(), "PlumageMemory", |system| {

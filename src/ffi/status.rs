@@ -1,5 +1,9 @@
 //! Status codes of the C ABI. Numbers are never reused or renumbered.
 
+/// What every call that can fail returns: `PLUMAGE_STATUS_OK` (0) or one
+/// of the other `PLUMAGE_STATUS_*` values (`plumage_status_name` names it).
+pub type PlumageStatus = u32;
+
 /// The call succeeded.
 pub const PLUMAGE_STATUS_OK: u32 = 0;
 /// A required pointer argument was NULL.

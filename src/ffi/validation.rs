@@ -126,7 +126,10 @@ const _: () = {
 /// or points to a struct whose `struct_size` is set and whose `struct_size`
 /// bytes are writable.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn plumage_system_validate(sys: *const PlumageSystem, out: *mut PlumageValidation) -> u32 {
+pub unsafe extern "C" fn plumage_system_validate(
+    sys: *const PlumageSystem,
+    out: *mut PlumageValidation,
+) -> PlumageStatus {
     with_system_ref_progress(sys, |system, progress| {
         // SAFETY: forwarded contract of this function.
         unsafe {
@@ -160,7 +163,7 @@ pub unsafe extern "C" fn plumage_system_validate_part(
     first_triangle: usize,
     triangle_count: usize,
     out: *mut PlumageValidation,
-) -> u32 {
+) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, VALIDATION_V1_SIZE, "PlumageValidation", |system| {
@@ -188,7 +191,7 @@ pub unsafe extern "C" fn plumage_system_part_stats(
     first_triangle: usize,
     triangle_count: usize,
     out: *mut PlumagePartStats,
-) -> u32 {
+) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
         figures_out(sys, out, std::mem::size_of::<PlumagePartStats>(), "PlumagePartStats", |system| {
