@@ -303,6 +303,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_system_ordering_stats": (c_uint32, [sys_p, POINTER(OrderingStats)]),
         "plumage_system_frame_stats": (c_uint32, [sys_p, POINTER(FrameStats)]),
         "plumage_system_memory": (c_uint32, [sys_p, POINTER(Memory)]),
+        "plumage_system_seek": (c_uint32, [sys_p, c_uint64, POINTER(c_uint64)]),
         "plumage_system_validate": (c_uint32, [sys_p, POINTER(Validation)]),
         "plumage_system_save_state": (c_uint32, [sys_p, POINTER(c_uint8), c_size_t, size_p]),
         "plumage_system_load_state": (c_uint32, [sys_p, POINTER(c_uint8), c_size_t]),

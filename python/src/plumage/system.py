@@ -609,6 +609,19 @@ class System:
         _check(lib.plumage_system_save_state(h, buf, n.value, ctypes.byref(n)), h, "plumage_system_save_state")
         return bytes(buf)[: n.value]
 
+    def seek(self, frame_index: int) -> int:
+        """Scrubbing with checkpoints (needs ``checkpoint_interval`` > 0):
+        prepares the system to reach the state after ``frame_index`` steps
+        and returns the frame count it now stands at, ``start``. Step it
+        with the clip's frames ``start .. frame_index - 1`` (step k takes
+        frame k) and the result is byte for byte what playback gave."""
+        h = self._h()
+        if not isinstance(frame_index, (int, np.integer)) or isinstance(frame_index, bool) or frame_index < 0:
+            raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"frame_index: expected an integer >= 0, got {frame_index!r}")
+        start = ctypes.c_uint64()
+        _check(lib.plumage_system_seek(h, int(frame_index), ctypes.byref(start)), h, "plumage_system_seek")
+        return int(start.value)
+
     def load_state(self, blob: bytes) -> None:
         h = self._h()
         try:
