@@ -39,6 +39,14 @@ else:
 # object name -> live state (the System, its last frame, the cache)
 _RUNS: Dict[str, Dict[str, Any]] = {}
 
+# Frames between two kept states of a dressed object: a jump replays at
+# most this many frames.
+CHECKPOINT_INTERVAL = 8
+
+# Set while a jump replays frames (the frame changes it makes are not
+# followed again).
+_REPLAYING = False
+
 
 def body_arrays(obj: bpy.types.Object, depsgraph: bpy.types.Depsgraph) -> tuple:
     """(positions (n, 3), triangles (m, 3)) of the evaluated mesh, object space."""
@@ -79,6 +87,9 @@ def vertex_map(mesh: bpy.types.Mesh, spec: str, components: int) -> Optional[np.
 
 def system_config(props: "PlumageSettings") -> Dict[str, Any]:
     cfg: Dict[str, Any] = {"seed": props.seed, "threads": props.threads, "mode": props.mode.lower(), "preset": props.preset.lower()}
+    # Checkpoints every few frames: a jump seeks and replays, so scrubbing
+    # shows what playback shows.
+    cfg["checkpoint_interval"] = CHECKPOINT_INTERVAL
     if props.shaft_segments > 0:
         cfg["shaft_segments"] = props.shaft_segments
     if props.density == "COUNT":
@@ -174,7 +185,8 @@ def create_run(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, A
     system = plumage.System(positions, triangles, **maps, **system_config(props))
     target = feathers_object(obj)
     write_feather_mesh(target, system.feather_geometry(), topology=True)
-    run = {"system": system, "frame": context.scene.frame_current, "target": target.name}
+    frame = context.scene.frame_current
+    run = {"system": system, "frame": frame, "start": frame, "target": target.name}
     old = _RUNS.pop(obj.name, None)
     if old:
         old["system"].close()
@@ -196,19 +208,40 @@ def follow(scene: bpy.types.Scene, depsgraph: bpy.types.Depsgraph) -> None:
             target.data.vertices.foreach_set("co", cache["positions"][cache["frames"].index(frame)].ravel())
             target.data.update()
             continue
-        positions, _ = body_arrays(obj, depsgraph)
         system = run["system"]
         if frame == run["frame"] + 1:
-            system.step(positions)  # playing forward: the incremental path
+            system.step(body_arrays(obj, depsgraph)[0])  # playing forward: the incremental path
         elif frame != run["frame"]:
-            system.evaluate(positions)  # a jump while scrubbing: solve this pose
+            if frame >= run["start"]:
+                replay_to(scene, obj, run, frame)  # a jump: what playback shows at this frame
+            else:
+                system.evaluate(body_arrays(obj, depsgraph)[0])  # before the dressed frame: solve this pose
         run["frame"] = frame
         write_feather_mesh(target, system.feather_geometry(), topology=False)
 
 
+def replay_to(scene: bpy.types.Scene, obj: bpy.types.Object, run: Dict[str, Any], frame: int) -> None:
+    """Brings the system to what playing from the dressed frame to `frame`
+    gives: back to the nearest kept state (seek), then the frames between
+    stepped one by one (at most CHECKPOINT_INTERVAL of them, or from the
+    frame played last when jumping forward)."""
+    global _REPLAYING
+    system, first = run["system"], run["start"]
+    begin = system.seek(frame - first)
+    if begin == frame - first:
+        return
+    _REPLAYING = True
+    try:
+        for k in range(begin, frame - first):
+            scene.frame_set(first + k + 1)  # step k takes the frame after the k-th
+            system.step(body_arrays(obj, bpy.context.evaluated_depsgraph_get())[0])
+    finally:
+        _REPLAYING = False
+
+
 @persistent
 def on_frame_change(scene: bpy.types.Scene, depsgraph: Optional[bpy.types.Depsgraph] = None) -> None:
-    if plumage is None or not _RUNS:
+    if plumage is None or not _RUNS or _REPLAYING:
         return
     follow(scene, depsgraph or bpy.context.evaluated_depsgraph_get())
 
@@ -247,7 +280,10 @@ class PLUMAGE_OT_bake(bpy.types.Operator):
         run = _RUNS[obj.name]
         frames, positions = [], []
         scene.frame_set(scene.frame_start)
-        run["system"].evaluate(body_arrays(obj, context.evaluated_depsgraph_get())[0])
+        if scene.frame_start >= run["start"]:
+            replay_to(scene, obj, run, scene.frame_start)
+        else:
+            run["system"].evaluate(body_arrays(obj, context.evaluated_depsgraph_get())[0])
         run["frame"] = scene.frame_start
         for frame in range(scene.frame_start, scene.frame_end + 1):
             scene.frame_set(frame)  # the handler steps the system

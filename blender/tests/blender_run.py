@@ -54,8 +54,10 @@ system = run["system"]
 feathers_obj = bpy.data.objects["Body_feathers"]
 
 result = {"feathers": system.feather_count, "frames": []}
+playback = {}
 for frame in range(1, 7):
     scene.frame_set(frame)
+    playback[frame] = system.save_state()
     v = system.validate()
     geo = system.feather_geometry()
     shown = np.empty(3 * len(feathers_obj.data.vertices), dtype=np.float32)
@@ -69,10 +71,18 @@ for frame in range(1, 7):
         "mesh_matches": bool(np.array_equal(shown, geo.positions.ravel())),
     })
 
-# scrubbing back jumps: the pose is solved from scratch
+# scrubbing: a jump seeks back to a kept state and replays; it shows what
+# playback showed, byte for byte
 scene.frame_set(3)
 result["scrub_back_frame_index"] = system.frame_stats().frame_index
 result["scrub_back_valid"] = system.validate().intersecting_pairs == 0
+result["scrub_back_is_playback"] = system.save_state() == playback[3]
+scene.frame_set(5)
+result["scrub_forward_is_playback"] = system.save_state() == playback[5]
+shown = np.empty(3 * len(feathers_obj.data.vertices), dtype=np.float32)
+feathers_obj.data.vertices.foreach_get("co", shown)
+result["scrub_mesh_matches"] = bool(np.array_equal(shown, system.feather_geometry().positions.ravel()))
+scene.frame_set(6)
 
 props.cache_path = out_dir + "/cache.npz"
 assert bpy.ops.plumage.bake() == {"FINISHED"}

@@ -49,7 +49,9 @@ def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
     for f in frames:
         assert f["intersecting_pairs"] == 0 and f["body_penetrations"] == 0, f
         assert f["coverage"] > 0.5 and f["mesh_matches"], f
-    assert result["scrub_back_frame_index"] == 5 and result["scrub_back_valid"]  # a jump evaluates, it does not step
+    # a jump seeks back and replays: the state after 2 steps, as playback left it
+    assert result["scrub_back_frame_index"] == 2 and result["scrub_back_valid"]
+    assert result["scrub_back_is_playback"] and result["scrub_forward_is_playback"] and result["scrub_mesh_matches"]
     assert result["cache_frames"] == [1, 2, 3, 4, 5, 6]
     assert result["cache_shape"][0] == 6 and result["cache_shape"][2] == 3
     assert result["cache_playback_matches"] and result["cache_playback_untouched"]
