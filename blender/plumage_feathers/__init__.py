@@ -30,11 +30,23 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProp
 
 try:
     import plumage
-except ImportError as e:  # the panel says so
+except ImportError as e:  # the panel and the operators say so
     plumage = None
-    IMPORT_ERROR = str(e)
+    IMPORT_ERROR = (
+        f"the plumage Python package cannot be imported in Blender's Python ({e}): install it into "
+        f"{bpy.utils.user_resource('SCRIPTS', path='modules')} (pip install ./python --no-deps --target DIR); "
+        "Blender started with --factory-startup does not look there unless BLENDER_USER_SCRIPTS points at its parent"
+    )
 else:
     IMPORT_ERROR = ""
+
+
+def _package_missing(cls: Any) -> bool:
+    """Whether `plumage` failed to import; then the operator's poll says why."""
+    if plumage is None:
+        cls.poll_message_set(IMPORT_ERROR)
+        return True
+    return False
 
 # object name -> live state (the System, its last frame, the cache)
 _RUNS: Dict[str, Dict[str, Any]] = {}
@@ -254,7 +266,7 @@ class PLUMAGE_OT_dress(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context: bpy.types.Context) -> bool:
-        return plumage is not None and context.object is not None and context.object.type == "MESH"
+        return not _package_missing(cls) and context.object is not None and context.object.type == "MESH"
 
     def execute(self, context: bpy.types.Context) -> set:
         try:
@@ -273,7 +285,7 @@ class PLUMAGE_OT_bake(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context: bpy.types.Context) -> bool:
-        return plumage is not None and context.object is not None and context.object.name in _RUNS
+        return not _package_missing(cls) and context.object is not None and context.object.name in _RUNS
 
     def execute(self, context: bpy.types.Context) -> set:
         obj, scene = context.object, context.scene
@@ -313,7 +325,8 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
         layout = self.layout
         if plumage is None:
             layout.label(text="The plumage package is missing:", icon="ERROR")
-            layout.label(text=IMPORT_ERROR)
+            for part in IMPORT_ERROR.split("; "):
+                layout.label(text=part)
             return
         props = context.object.plumage
         layout.prop(props, "preset", expand=True)

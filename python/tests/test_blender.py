@@ -63,3 +63,30 @@ def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
     keep = os.environ.get("PLUMAGE_BLENDER_RENDER")
     if keep:
         shutil.copy(png, keep)
+
+
+def test_addon_without_the_package_says_how_to_install_it(tmp_path: Path) -> None:
+    blender = os.environ.get("PLUMAGE_BLENDER") or shutil.which("blender")
+    if blender is None:
+        pytest.skip("Blender is not installed (Debian: apt-get install blender)")
+    addon_zip = tmp_path / "plumage_feathers.zip"
+    with zipfile.ZipFile(addon_zip, "w") as z:
+        for f in (REPO / "blender" / "plumage_feathers").rglob("*.py"):
+            z.write(f, f.relative_to(REPO / "blender"))
+    # an empty user scripts folder: the package is not there
+    env = {**os.environ, "BLENDER_USER_SCRIPTS": str(tmp_path / "scripts"), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
+    env.pop("PYTHONPATH", None)
+    run = subprocess.run(
+        [blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+         str(REPO / "blender" / "tests" / "blender_missing_package.py"), "--", str(addon_zip)],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=300,
+    )
+    lines = [line for line in run.stdout.splitlines() if line.startswith("PLUMAGE_RESULT ")]
+    assert run.returncode == 0 and lines, run.stdout[-4000:]
+    result = json.loads(lines[-1][len("PLUMAGE_RESULT "):])
+    if not result["import_error"]:
+        pytest.skip("plumage is importable in Blender's Python from elsewhere (a system-wide install)")
+    assert "plumage Python package cannot be imported" in result["import_error"], result
+    assert "pip install" in result["import_error"] and "BLENDER_USER_SCRIPTS" in result["import_error"], result
+    # the operator's refusal carries the reason, not only "context is incorrect"
+    assert "plumage Python package cannot be imported" in result["operator_error"], result
