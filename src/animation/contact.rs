@@ -23,6 +23,7 @@
 use crate::adjustment::AdjustParams;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
+use crate::progress::{Phase, Progress};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -195,7 +196,15 @@ impl Contacts {
     /// margin. Only an earlier candidate can be an obstacle, so the other
     /// half of the entries waits until an order makes them earlier
     /// ([`obstacle_rows`](Self::obstacle_rows)).
-    pub fn update(&mut self, feathers: Posed<'_>, params: &AdjustParams, candidates: Candidates<'_>) {
+    /// Polls `progress` as it goes: once it says stop, the rest is left
+    /// as it was (the caller's next check fails and the frame is dropped).
+    pub fn update(
+        &mut self,
+        feathers: Posed<'_>,
+        params: &AdjustParams,
+        candidates: Candidates<'_>,
+        progress: &Progress,
+    ) {
         let Posed { frames, shapes, poses } = feathers;
         let Candidates { offsets, indices, rank } = candidates;
         let n = frames.len();
@@ -213,6 +222,9 @@ impl Contacts {
             .enumerate()
             .with_min_len(256)
             .for_each(|(i, (s, (r2, shadow)))| {
+                if !progress.poll(Phase::Ordering, 0.25, i) {
+                    return;
+                }
                 *s = Sphere::of(&frames[i], &shapes[i], poses[i]);
                 let grown = s.with_pose_margin(&shapes[i]).radius;
                 *r2 = Reach2 { centre: s.centre, touch: s.radius * s.radius, near: grown * grown };
@@ -221,6 +233,9 @@ impl Contacts {
         let (shadows, reach2) = (&self.shadows, &self.reach2);
         self.touch.resize(indices.len(), APART);
         self.touch.par_chunks_mut(ENTRY_CHUNK).enumerate().for_each(|(chunk, out)| {
+            if progress.check(Phase::Ordering, 0.28).is_err() {
+                return;
+            }
             let base = chunk * ENTRY_CHUNK;
             for_each_row_part(offsets, base..base + out.len(), |i, part| {
                 let rank_i = rank[i];
@@ -459,7 +474,7 @@ mod tests {
         let rows = |first: &[u32], last: &[u32]| {
             let mut c = Contacts::default();
             let posed = Posed { frames: &frames, shapes: &shapes, poses: &poses };
-            c.update(posed, &params, Candidates { offsets, indices, rank: first });
+            c.update(posed, &params, Candidates { offsets, indices, rank: first }, &Progress::none());
             let (o, i) = c.obstacle_rows(Candidates { offsets, indices, rank: last });
             (o.to_vec(), i.to_vec())
         };

@@ -143,12 +143,12 @@ pub fn step_coat(
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let rank = coat.order.ranks();
     let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
-    step.contacts.update(posed, &dressing.adjust_params, Candidates { offsets, indices, rank });
+    step.contacts.update(posed, &dressing.adjust_params, Candidates { offsets, indices, rank }, progress);
     progress.check(Phase::Ordering, 0.3)?;
 
     // 2. R_k from the relative motion of the roots since the last frame.
     root_maps(&step.previous_frames, &coat.frames, &mut step.maps);
-    surroundings_displacement(coat, dressing, step, verify);
+    surroundings_displacement(coat, dressing, step, verify, progress);
     progress.check(Phase::Ordering, 0.4)?;
     step.seeds.clear();
     step.seeds.resize(n, false);
@@ -411,7 +411,13 @@ fn orientations_into(frames: &[RootFrame], out: &mut Vec<glam::Quat>) {
 /// the displacement at their length (what its height field sees). With
 /// `net`, also how far the surroundings recorded when it was last adjusted
 /// moved since (`net`, the staleness of the verifying mode).
-fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWorkspace, net: bool) {
+fn surroundings_displacement(
+    coat: &Coat,
+    dressing: &Dressing,
+    step: &mut StepWorkspace,
+    net: bool,
+    progress: &Progress,
+) {
     let (maps, frames, ranks, contacts) = (&step.maps, &coat.frames, &step.previous_ranks, &step.contacts);
     let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let (nb, staleness) = (&coat.neighbourhoods, &coat.staleness);
@@ -426,6 +432,10 @@ fn surroundings_displacement(coat: &Coat, dressing: &Dressing, step: &mut StepWo
     let oriented = |j: usize| Oriented { frame: &frames[j], orientation: orientations[j] };
     let outputs = step.displacement.par_iter_mut().zip(step.net.par_iter_mut());
     outputs.enumerate().with_min_len(128).for_each(|(i, (out, moved_net))| {
+        // Stopped: the rest keep stale figures (the frame is dropped).
+        if !progress.poll(Phase::Ordering, 0.35, i) {
+            return;
+        }
         let (here, frame) = (&maps[i], &frames[i]);
         // With the net rule the displacement only tells whether anything
         // moved at all (a suspect), so the first that did is enough.
