@@ -220,9 +220,11 @@ fn a_soup_whose_faces_all_cross_finishes() {
     let secs = t.elapsed().as_secs_f64();
     eprintln!("soup: {} triangles, {} feathers in {secs:.2} s", indices.len() / 3, sys.feather_count());
     assert!(sys.feather_count() > 1000);
-    // About 20 000 feathers: 5.7 s here with the per-cell judgement, 19 s
-    // without it (a hang guard, like the bounds above, with room for load).
-    assert!(secs < 15.0, "{secs:.1} s");
+    // About 20 000 feathers: 5.7 s on a quiet machine with the per-cell
+    // judgement, 19 s without it, 44 s before both. A hang guard, not a
+    // speed figure: with the test binary's other tests, a fuzz run and a
+    // build beside it on 2 cores this took 16.9 s (session 13).
+    assert!(secs < 30.0, "{secs:.1} s");
 }
 
 /// Found by `fuzz_create`: a spacing of f32::MAX planted one feather whose
