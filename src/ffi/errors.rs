@@ -3,7 +3,9 @@
 
 use super::boundary::{PlumageSystem, quietly, thread_error};
 #[cfg(feature = "test-hooks")]
-use super::boundary::{with_system, with_system_ref};
+use super::boundary::with_system;
+#[cfg(feature = "test-hooks")]
+use super::status::PlumageStatus;
 use std::ffi::c_char;
 
 /// Copies the message of the most recent call on `sys` into `buf` (at most
