@@ -1,9 +1,9 @@
 //! The message of the last failed call, and (test builds only) the hooks
 //! that prove the panic boundary.
 
-use super::boundary::{PlumageSystem, quietly, thread_error};
 #[cfg(feature = "test-hooks")]
 use super::boundary::with_system;
+use super::boundary::{PlumageSystem, quietly, thread_error};
 #[cfg(feature = "test-hooks")]
 use super::status::PlumageStatus;
 use std::ffi::c_char;
