@@ -271,17 +271,6 @@
 #define PLUMAGE_INSTANCE_BEND_RANGE 3.1415927
 
 /**
- * Triangle tests allowed per body triangle and per root aimed at (see
- * [`WorkBudget`]): the shared test models take at most about 1 000.
- */
-#define BURIAL_TESTS_PER_ELEMENT 4096
-
-/**
- * Triangle tests always allowed, whatever the mesh's size.
- */
-#define BURIAL_TESTS_FLOOR (1 << 22)
-
-/**
  * An opaque feathering system. Create with `plumage_system_create`, free
  * with `plumage_system_destroy`.
  */

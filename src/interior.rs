@@ -186,10 +186,10 @@ impl WorkBudget {
 
 /// Triangle tests allowed per body triangle and per root aimed at (see
 /// [`WorkBudget`]): the shared test models take at most about 1 000.
-pub const BURIAL_TESTS_PER_ELEMENT: u64 = 4096;
+pub(crate) const BURIAL_TESTS_PER_ELEMENT: u64 = 4096;
 
 /// Triangle tests always allowed, whatever the mesh's size.
-pub const BURIAL_TESTS_FLOOR: u64 = 1 << 22;
+pub(crate) const BURIAL_TESTS_FLOOR: u64 = 1 << 22;
 
 /// Per-thread marks of the triangles one ray has tested: `marks[t] ==
 /// stamp` once triangle `t` was tested by the current ray.

@@ -62,3 +62,17 @@ fn header_declares_the_contract() {
         assert!(header.contains(name), "header lacks `{name}`");
     }
 }
+
+/// Every macro the header defines carries the `PLUMAGE_` prefix: a host's
+/// own `MAX_SEGMENTS` or `BURIAL_TESTS_FLOOR` must not collide with ours.
+#[test]
+fn every_macro_is_prefixed() {
+    let raw = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("include/plumage.h")).unwrap();
+    let unprefixed: Vec<&str> = raw
+        .lines()
+        .filter_map(|l| l.trim_start().strip_prefix("#define "))
+        .filter_map(|rest| rest.split_whitespace().next())
+        .filter(|name| !name.starts_with("PLUMAGE_"))
+        .collect();
+    assert!(unprefixed.is_empty(), "unprefixed macros in plumage.h: {unprefixed:?}");
+}
