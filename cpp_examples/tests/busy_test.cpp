@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "check.h"
-#include "sphere.h"
+#include "sphere_mesh.h"
 
 namespace {
 
@@ -34,19 +34,14 @@ int32_t hold_step(void* user, uint32_t, float) {
     return 0;
 }
 
-PlumageSystem* create(Rendezvous* r, const std::vector<float>& xyz, const std::vector<uint32_t>& tri) {
+PlumageSystem* create(Rendezvous* r, const SphereMesh& sphere) {
     PlumageConfig cfg;
     plumage_config_init(&cfg);
     cfg.threads = 1;
     cfg.target_feathers = 200;
     cfg.progress = hold_step;
     cfg.progress_user_data = r;
-    PlumageMeshDesc mesh;
-    plumage_mesh_desc_init(&mesh);
-    mesh.positions = xyz.data();
-    mesh.vertex_count = SPHERE_VERTICES;
-    mesh.indices = tri.data();
-    mesh.triangle_count = SPHERE_TRIANGLES;
+    const PlumageMeshDesc mesh = sphere.desc();
     PlumageSystem* sys = nullptr;
     CHECK(plumage_system_create(&cfg, &mesh, &sys) == PLUMAGE_STATUS_OK);
     return sys;
@@ -55,15 +50,14 @@ PlumageSystem* create(Rendezvous* r, const std::vector<float>& xyz, const std::v
 }  // namespace
 
 int main() {
-    std::vector<float> xyz(3 * SPHERE_VERTICES);
-    std::vector<uint32_t> tri(3 * SPHERE_TRIANGLES);
-    sphere_fill(xyz.data(), tri.data());
+    const SphereMesh sphere;
+    const std::vector<float>& xyz = sphere.rest;
     std::vector<float> moved(xyz);
     for (size_t i = 0; i < moved.size(); i += 3) moved[i] *= 1.05f;
 
     // One thread inside a step; the other is refused, destroy included.
     Rendezvous r;
-    PlumageSystem* sys = create(&r, xyz, tri);
+    PlumageSystem* sys = create(&r, sphere);
     if (sys == nullptr) return plumage_check::finish("busy_test");
     uint32_t seen[4] = {};
     std::thread other([&] {
@@ -86,7 +80,7 @@ int main() {
     // Two threads stepping one system as fast as they can: each call is OK
     // or BUSY, and the system ends valid.
     Rendezvous idle;
-    sys = create(&idle, xyz, tri);
+    sys = create(&idle, sphere);
     if (sys == nullptr) return plumage_check::finish("busy_test");
     std::atomic<int> ok{0}, busy{0}, other_status{0};
     auto stepper = [&](const std::vector<float>& pose) {

@@ -18,14 +18,26 @@ import plumage
 from conftest import REPO
 
 
-def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
+def _blender() -> str:
+    """The Blender program, or a counted skip."""
     blender = os.environ.get("PLUMAGE_BLENDER") or shutil.which("blender")
     if blender is None:
         pytest.skip("Blender is not installed (Debian: apt-get install blender)")
+    return blender
+
+
+def _addon_zip(tmp_path: Path) -> Path:
+    """The add-on packed as Blender installs it."""
     addon_zip = tmp_path / "plumage_feathers.zip"
     with zipfile.ZipFile(addon_zip, "w") as z:
         for f in (REPO / "blender" / "plumage_feathers").rglob("*.py"):
             z.write(f, f.relative_to(REPO / "blender"))
+    return addon_zip
+
+
+def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
+    blender = _blender()
+    addon_zip = _addon_zip(tmp_path)
     # Blender's own Python finds the package in the user scripts' modules folder
     scripts = tmp_path / "scripts"
     shutil.copytree(Path(plumage.__file__).parent, scripts / "modules" / "plumage", ignore=shutil.ignore_patterns("__pycache__"))
@@ -66,13 +78,8 @@ def test_addon_dresses_steps_bakes_and_renders(tmp_path: Path) -> None:
 
 
 def test_addon_without_the_package_says_how_to_install_it(tmp_path: Path) -> None:
-    blender = os.environ.get("PLUMAGE_BLENDER") or shutil.which("blender")
-    if blender is None:
-        pytest.skip("Blender is not installed (Debian: apt-get install blender)")
-    addon_zip = tmp_path / "plumage_feathers.zip"
-    with zipfile.ZipFile(addon_zip, "w") as z:
-        for f in (REPO / "blender" / "plumage_feathers").rglob("*.py"):
-            z.write(f, f.relative_to(REPO / "blender"))
+    blender = _blender()
+    addon_zip = _addon_zip(tmp_path)
     # an empty user scripts folder: the package is not there
     env = {**os.environ, "BLENDER_USER_SCRIPTS": str(tmp_path / "scripts"), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
     env.pop("PYTHONPATH", None)
