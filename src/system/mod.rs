@@ -161,9 +161,11 @@ impl System {
         system.export();
         system.all_changed_now();
         system.keep_checkpoint();
-        let held = system.memory().total();
-        if config.memory_limit > 0 && held > config.memory_limit {
-            return Err(crate::memory::over_limit("the system would hold", held, config.memory_limit));
+        if config.memory_limit > 0 {
+            let held = system.memory().total();
+            if held > config.memory_limit {
+                return Err(crate::memory::over_limit("the system would hold", held, config.memory_limit));
+            }
         }
         Ok(system)
     }
@@ -419,12 +421,14 @@ impl System {
         let limit = self.dressing.config.memory_limit;
         let backup = (progress.is_interruptible() || limit > 0)
             .then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
-        let result = update(self, progress).and_then(|()| {
-            let held = self.memory().total();
-            if limit > 0 && held > limit {
-                return Err(crate::memory::over_limit("after this frame the system would hold", held, limit));
-            }
-            Ok(())
+        let result = update(self, progress).and_then(|()| match limit {
+            0 => Ok(()),
+            _ => match self.memory().total() {
+                held if held > limit => {
+                    Err(crate::memory::over_limit("after this frame the system would hold", held, limit))
+                }
+                _ => Ok(()),
+            },
         });
         match result {
             Ok(()) => {
