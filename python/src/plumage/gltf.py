@@ -914,15 +914,19 @@ class Scene:
         return np.concatenate([p.rest_directions(name, first) for p in self.parts])
 
     def frame_times(self, fps: float = 30.0, start: float = 0.0, frames: Optional[int] = None) -> npt.NDArray[np.float64]:
-        """Clip times of the frames to step: the clip's start + `start` + k / fps,
-        up to the end of the clip by default (main.cpp's frame_times)."""
-        clip = self.clip
-        if clip is not None and start > clip.duration + 1e-9:
-            raise GltfUsageError(f'--start {start:g} is past the end of clip "{clip.name}" ({clip.duration:g} s long)')
-        n = 0
-        if frames is not None:
-            n = frames
-        elif clip is not None:
-            n = math.floor((clip.duration - start) * fps + 1e-6) + 1
-        first = (clip.start if clip is not None else 0.0) + start
-        return np.array([first + k / fps for k in range(n)], np.float64)
+        return frame_times(self.clip, fps, start, frames)
+
+
+def frame_times(clip: Optional[Clip], fps: float = 30.0, start: float = 0.0, frames: Optional[int] = None) -> npt.NDArray[np.float64]:
+    """Clip times of the frames to step: the clip's start + `start` + k / fps,
+    up to the end of the clip by default; without a clip, `frames` frames
+    from `start` (none by default) (main.cpp's frame_times)."""
+    if clip is not None and start > clip.duration + 1e-9:
+        raise GltfUsageError(f'--start {start:g} is past the end of clip "{clip.name}" ({clip.duration:g} s long)')
+    n = 0
+    if frames is not None:
+        n = frames
+    elif clip is not None:
+        n = math.floor((clip.duration - start) * fps + 1e-6) + 1
+    first = (clip.start if clip is not None else 0.0) + start
+    return np.array([first + k / fps for k in range(n)], np.float64)
