@@ -43,7 +43,7 @@ def _vector(text: str) -> Tuple[float, float, float]:
         raise argparse.ArgumentTypeError(f"{text}: expected X,Y,Z") from None
     if len(xyz) != 3 or not all(np.isfinite(xyz)) or any(abs(v) > float(np.finfo(np.float32).max) for v in xyz):
         raise argparse.ArgumentTypeError(f"{text}: expected X,Y,Z (finite, in float range)")
-    return xyz  # type: ignore[return-value]
+    return xyz
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ except ImportError as e:  # pragma: no cover - exercised only without pygltflib
 
 # glTF constants
 _BYTE, _UBYTE, _SHORT, _USHORT, _UINT, _FLOAT = 5120, 5121, 5122, 5123, 5125, 5126
-_COMPONENT = {
+_COMPONENT: Dict[int, Tuple["np.dtype[Any]", float]] = {
     _BYTE: (np.dtype("<i1"), 127.0),
     _UBYTE: (np.dtype("<u1"), 255.0),
     _SHORT: (np.dtype("<i2"), 32767.0),
@@ -145,8 +145,10 @@ def _raw_json(path: Path, data: bytes) -> Dict[str, Any]:
         length, kind = struct.unpack_from("<II", data, 12)
         if kind != 0x4E4F534A:
             raise GltfError(f"{path}: the first GLB chunk is not JSON")
-        return json.loads(data[20 : 20 + length])
-    return json.loads(data)
+        raw: Dict[str, Any] = json.loads(data[20 : 20 + length])
+        return raw
+    doc: Dict[str, Any] = json.loads(data)
+    return doc
 
 
 class GltfFile:
@@ -175,11 +177,11 @@ class GltfFile:
         self._buffers: Dict[int, bytes] = {}
 
     @property
-    def meshes(self) -> list:
+    def meshes(self) -> List[Any]:
         return self.gltf.meshes or []
 
     @property
-    def nodes(self) -> list:
+    def nodes(self) -> List[Any]:
         return self.gltf.nodes or []
 
     def node_weights(self, node: int) -> List[float]:
@@ -601,7 +603,7 @@ class MeshScene:
                 if not 0 <= n < len(nodes):
                     continue
                 if nodes[n].mesh == self.mesh_index:
-                    return n
+                    return int(n)
                 stack.extend(reversed(nodes[n].children or []))
         for n in self.order:
             if nodes[n].mesh == self.mesh_index:
@@ -662,7 +664,7 @@ class MeshScene:
         self.target_deltas = [np.concatenate(d) for d in deltas]
         if self.skinned:
             width = max(j.shape[1] for j, _ in influences)
-            self.influence_joint = np.concatenate([np.pad(j, ((0, 0), (0, width - j.shape[1]))) for j, _ in influences])
+            self.influence_joint = np.concatenate([np.pad(j, ((0, 0), (0, width - j.shape[1])), constant_values=-1) for j, _ in influences])
             self.influence_weight = np.concatenate([np.pad(w, ((0, 0), (0, width - w.shape[1]))) for _, w in influences])
         # default weights: the node's, else the mesh's
         weights = [float(w) for w in (mesh.weights or [])]
@@ -783,8 +785,8 @@ class MeshScene:
         if not self.skinned:
             return _transform(maps[0], p)
         joint, weight = self.influence_joint, self.influence_weight
-        used = joint >= 0
-        out = np.where(used.any(axis=1)[:, None], 0.0, p)  # no influence: left in place
+        used: np.ndarray = joint >= 0
+        out = np.where(np.any(used, axis=1)[:, None], 0.0, p)  # no influence: left in place
         for k in range(joint.shape[1]):
             q = _transform(maps[np.maximum(joint[:, k], 0)], p)
             out = np.where(used[:, k : k + 1], out + weight[:, k : k + 1] * q, out)
