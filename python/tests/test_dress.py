@@ -191,10 +191,12 @@ def test_usd_feathers_are_the_hosts_glb(host, tmp_path, name, preset) -> None:
 # ---------------------------------------------------------------- a synthetic model
 
 
-def synthetic_gltf(path: Path, animated: bool = True) -> Path:
+def synthetic_gltf(path: Path, animated: bool = True, external: bool = False) -> Path:
     """A sphere under a matrix node and an animated TRS node, with two morph
-    targets (one sparse) and a custom attribute; the clip samples translation
-    by STEP, rotation and morph weights by CUBICSPLINE, scale by LINEAR."""
+    targets (one sparse) and custom attributes, plus a non-indexed triangle
+    strip (a ribbon, no targets) in the same mesh; the clip samples
+    translation by STEP, rotation and morph weights by CUBICSPLINE, scale by
+    LINEAR. `external`: the buffer in a .bin file beside the .gltf, else a data URI."""
     verts, tris = uv_sphere(10, 16, 0.5)
     n = len(verts)
     chunks: List[bytes] = []
@@ -223,6 +225,10 @@ def synthetic_gltf(path: Path, animated: bool = True) -> Path:
                       "sparse": {"count": len(picked), "indices": {"bufferView": accessors[sparse_idx]["bufferView"], "componentType": 5123},
                                  "values": {"bufferView": accessors[sparse_val]["bufferView"]}}})
     sparse = len(accessors) - 1
+    ribbon = np.array([[x, 0.6 + 0.1 * (i % 2), 0.1 * x] for i, x in enumerate(np.linspace(-0.5, 0.5, 12))], np.float32)
+    ribbon_position = add(ribbon, 5126, "VEC3", min=ribbon.min(0).tolist(), max=ribbon.max(0).tolist())
+    ribbon_density = add(np.full((len(ribbon), 2), 1.5, np.float32), 5126, "VEC2")
+    ribbon_flow = add(np.tile(np.array([[127, 0, 0, 0]], np.int8), (len(ribbon), 1)), 5120, "VEC4", normalized=True)
     nodes = [
         {"name": "root", "matrix": [0.9, 0.1, 0, 0, -0.1, 0.9, 0, 0, 0, 0, 1.2, 0, 0.3, -0.2, 0.1, 1], "children": [1]},
         {"name": "arm", "translation": [0, 1, 0], "rotation": [0, 0, 0.3826834, 0.9238795], "children": [2]},
@@ -235,7 +241,8 @@ def synthetic_gltf(path: Path, animated: bool = True) -> Path:
         "nodes": nodes,
         "meshes": [{"name": "ball", "weights": [0.9, 0.9], "primitives": [{
             "attributes": {"POSITION": position, "_DENSITY": density, "_FLOW": flow},
-            "indices": indices, "targets": [{"POSITION": bulge}, {"POSITION": sparse}]}]}],
+            "indices": indices, "targets": [{"POSITION": bulge}, {"POSITION": sparse}]},
+            {"attributes": {"POSITION": ribbon_position, "_DENSITY": ribbon_density, "_FLOW": ribbon_flow}, "mode": 5}]}],
     }
     if animated:
         keys = np.array([0.0, 0.4, 1.1, 1.5], np.float32)
@@ -259,19 +266,26 @@ def synthetic_gltf(path: Path, animated: bool = True) -> Path:
             {"sampler": 3, "target": {"node": 2, "path": "weights"}},
         ]}]
     blob = b"".join(chunks)
-    doc["buffers"] = [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}]
+    if external:
+        (path.parent / "ball data.bin").write_bytes(blob)
+        uri = "ball%20data.bin"
+    else:
+        uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
+    doc["buffers"] = [{"byteLength": len(blob), "uri": uri}]
     doc["bufferViews"] = views
     doc["accessors"] = accessors
     path.write_text(json.dumps(doc))
     return path
 
 
-def test_synthetic_samplers_sparse_and_matrix_are_the_hosts(host, tmp_path) -> None:
-    model = synthetic_gltf(tmp_path / "ball.gltf")
+@pytest.mark.parametrize("external", [False, True])
+def test_synthetic_samplers_sparse_and_matrix_are_the_hosts(host, tmp_path, external) -> None:
+    model = synthetic_gltf(tmp_path / "ball.gltf", external=external)
     maps = ("--spacing-map", "_DENSITY:1", "--flow-map", "_FLOW")
     poses = host_poses(host, tmp_path, str(model), "--fps", "20", *maps, glb=False)
     scene = gltf.Scene(model)
     assert scene.clip is not None and scene.clip.duration == 1.5 and len(poses.times) == 31
+    assert len(scene.triangles) == len(uv_sphere(10, 16)[1]) + 10  # the strip's 12 vertices make 10 triangles
     assert_reader_is_host(scene, poses, fps=20)
     assert scene.vertex_attribute("_DENSITY", 1).tobytes() == poses.maps["spacing_scale"].tobytes()
     assert scene.rest_directions("_FLOW").tobytes() == poses.maps["orientations"].tobytes()
