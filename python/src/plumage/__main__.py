@@ -94,6 +94,16 @@ def _start(text: str) -> float:
     return v
 
 
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not np.isfinite(v) or abs(v) > float(np.finfo(np.float32).max):
+        raise argparse.ArgumentTypeError(f"{text}: expected a finite number in float range")
+    return v
+
+
 def _resolution(text: str) -> Tuple[int, int]:
     fields = text.split(",")
     if len(fields) != 2 or not all(f.isdigit() and 3 <= int(f) <= 4096 for f in fields):
@@ -126,7 +136,7 @@ def dress_parser() -> argparse.ArgumentParser:
                    help="the library's defaults: contour feathers (default; `sleek` is the same), the rigid kite, or fish scales")
     count = c.add_mutually_exclusive_group()
     count.add_argument("--feathers", type=_nonnegative(2**32 - 1), metavar="N", help="target feather count")
-    count.add_argument("--spacing", type=float, metavar="D", help="root spacing in model units (instead of --feathers)")
+    count.add_argument("--spacing", type=_finite, metavar="D", help="root spacing in model units (instead of --feathers)")
     c.add_argument("--seed", type=_nonnegative(2**64 - 1), help="random seed")
     c.add_argument("--mode", choices=["incremental", "legacy", "rebuild"], help="how frames are solved (default incremental)")
     c.add_argument("--threads", type=_nonnegative(2**32 - 1), help="worker threads (0 = all cores)")
