@@ -155,18 +155,18 @@ def dress(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
                           cwd=tmp_path)
 
 
-@pytest.mark.parametrize("name,preset", [("Fox", "kite"), ("Flamingo", "feathers"), ("bird", "scales")])
+@pytest.mark.parametrize("name,preset", [("Fox", "kite"), ("Flamingo", "feathers"), ("bird", "scales"), ("builtin", "feathers")])
 def test_usd_feathers_are_the_hosts_glb(host, tmp_path, name, preset) -> None:
     """The USD of `dress` (no host) against the host's .glb of the same run, frame by frame."""
     pytest.importorskip("pxr", reason="usd-core is not installed")
     from pxr import Usd, UsdGeom
 
-    model = shared_model(name)
+    model = "builtin" if name == "builtin" else str(shared_model(name))
     options = ["--feathers", "300", "--frames", "3", "--fps", "10", "--seed", "5", "--threads", "1", "--preset", preset]
-    run = dress(tmp_path, str(model), "--out", str(tmp_path / "run.usda"), *options)
+    run = dress(tmp_path, model, "--out", str(tmp_path / "run.usda"), *options)
     assert run.returncode == 0, run.stderr
     assert "feathers" in run.stdout and run.stderr == ""
-    run_host(host, str(model), *options, "--validate", "none", "--out", str(tmp_path / "host.glb"), "--poses", str(tmp_path / "host.poses"))
+    run_host(host, *([] if model == "builtin" else [model]), *options, "--validate", "none", "--out", str(tmp_path / "host.glb"), "--poses", str(tmp_path / "host.poses"))
     poses = read_poses(tmp_path / "host.poses")
 
     stage = Usd.Stage.Open(str(tmp_path / "run.usda"))
