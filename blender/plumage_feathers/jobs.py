@@ -20,8 +20,12 @@ from typing import Any, Callable, Optional
 
 RUNNING, FINISHED, CANCELLED, FAILED = "RUNNING", "FINISHED", "CANCELLED", "FAILED"
 
-# the library's phases of a create, in order (plumage._ffi.PHASES)
-PHASE_ORDER = ("preparing", "sampling", "ordering", "adjusting", "validating")
+# the library's phases of a create (plumage._ffi.PHASES) and the share of
+# the whole each stands for in the progress bar (roughly their share of the
+# time on a large mesh). With several threads the phases interleave (a
+# sampling thread still reports while adjusting has begun): the bar shows
+# the sum of each phase's furthest fraction, so it never goes back.
+PHASE_WEIGHTS = {"preparing": 0.05, "sampling": 0.25, "ordering": 0.1, "adjusting": 0.6}
 
 
 class DressJob:
@@ -36,6 +40,7 @@ class DressJob:
         self._thread: Optional[threading.Thread] = None
         self.phase = ""
         self.fraction = 0.0
+        self._furthest: dict = {}
         self.system: Any = None
         self.error: Optional[BaseException] = None
 
@@ -43,6 +48,8 @@ class DressJob:
         if not self._active:
             return False
         self.phase, self.fraction = phase, float(fraction)
+        if fraction > self._furthest.get(phase, 0.0):
+            self._furthest[phase] = float(fraction)
         return self._cancel.is_set()
 
     def start(self) -> None:
@@ -66,8 +73,8 @@ class DressJob:
         """The whole create's share done, in [0, 1]."""
         if self._done.is_set():
             return 1.0
-        k = PHASE_ORDER.index(self.phase) if self.phase in PHASE_ORDER else 0
-        return min(1.0, (k + min(max(self.fraction, 0.0), 1.0)) / (len(PHASE_ORDER) - 1))
+        done = sum(w * min(max(self._furthest.get(p, 0.0), 0.0), 1.0) for p, w in PHASE_WEIGHTS.items())
+        return min(done, 0.999)
 
     def tick(self, cancel_requested: bool = False) -> str:
         """RUNNING, FINISHED (`system` is set), CANCELLED or FAILED (`error`)."""

@@ -175,6 +175,19 @@ def build(addon_zip, out_dir):
         "material_principled": bool(mat and any(n.bl_idname == "ShaderNodeBsdfPrincipled" for n in mat.node_tree.nodes)),
     }
 
+    # the modal Dress's loop (the operator's timer ticks) inside Blender: the
+    # same system as Dress; cancelled at once, nothing
+    jobs = plumage_feathers.jobs
+    inputs = plumage_feathers.dress_inputs(bpy.context, arm)
+    job = jobs.DressJob(lambda progress: plumage_feathers.make_system(inputs, progress))
+    status = jobs.drive(job, interval=0.02)
+    result["job_status"] = status
+    result["job_is_dress"] = status == jobs.FINISHED and job.system.save_state() == system.save_state()
+    if job.system is not None:
+        job.system.close()
+    job = jobs.DressJob(lambda progress: plumage_feathers.make_system(inputs, progress))
+    result["job_cancelled"] = jobs.drive(job, cancel_requested=lambda now: True, interval=0.02)
+
     # play 1..20: the library's validation at every frame
     crest_rows = slice(sum(run["counts"][:0]), run["counts"][0])  # "Crest" comes first in name order
     playback, frames = {}, []

@@ -4,18 +4,22 @@ library's validation at each frame, baked, and one frame rendered."""
 
 from __future__ import annotations
 
+import importlib.util
+import itertools
 import json
 import os
 import shutil
 import subprocess
 import zipfile
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 
 import plumage
 
-from conftest import REPO
+from conftest import REPO, uv_sphere
 
 
 def _blender() -> str:
@@ -127,6 +131,7 @@ def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening
     assert built["sources"] == ["Crest", "Head", "Torso"]  # two skinned meshes and the bone-parented one, once each
     assert 500 <= built["feathers"] <= 1000 and built["feathers_object_identity"]
     assert all(built["attributes"][k] for k in built["attributes"]), built["attributes"]
+    assert built["job_status"] == "FINISHED" and built["job_is_dress"] and built["job_cancelled"] == "CANCELLED", built
     assert built["attributes"]["material"] == "Plumage feathers"
     frames = built["frames"]
     assert [f["frame_index"] for f in frames] == list(range(20))
@@ -154,3 +159,73 @@ def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening
         assert c["is_baked"] and c["modifier_off"] and c["intersecting_pairs"] == 0 and c["body_penetrations"] == 0, c
     if played["package_importable"]:
         pytest.skip("plumage is importable in Blender's Python from elsewhere: the cache played, but not proven without the package")
+
+
+def _addon_module(name: str) -> Any:
+    """A bpy-free module of the add-on (jobs, pointcache), loaded without Blender."""
+    spec = importlib.util.spec_from_file_location(f"plumage_feathers_{name}", REPO / "blender" / "plumage_feathers" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_dress_job_reports_progress_every_half_second_and_cancels_within_it() -> None:
+    """The modal Dress's loop (jobs.drive: what the operator does on each timer
+    event and on Esc) with the real library, without Blender: a create of
+    about 2 s reports progress at every tick (0.1 s apart, never more than
+    0.5 s) and rising; a cancel stops it within 0.5 s with nothing created."""
+    jobs = _addon_module("jobs")
+    big = uv_sphere(200, 400)
+
+    def make(progress: Any) -> plumage.System:
+        return plumage.System(*big, target_feathers=20000, threads=2, seed=3, progress=progress)
+
+    reports: list = []
+    job = jobs.DressJob(make)
+    status = jobs.drive(job, report=lambda now, fraction: reports.append((now, fraction)))
+    assert status == jobs.FINISHED and job.system is not None and job.system.feather_count > 10000
+    times = [t for t, _ in reports]
+    gaps = np.diff(times)
+    assert len(reports) >= 5 and gaps.max() <= 0.5, gaps.max()
+    fractions = [f for _, f in reports]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and len(set(fractions)) >= 4, fractions
+    # the callback stays in the system's configuration: later calls are not stopped by it
+    job.cancel()
+    job.system.step(big[0])
+    job.system.close()
+
+    cancelled_at: list = []
+
+    def esc(now: float) -> bool:
+        if not cancelled_at and reports2 and reports2[-1][1] > 0.05:
+            cancelled_at.append(now)  # Esc once the create is well under way
+        return bool(cancelled_at)
+
+    reports2: list = []
+    job = jobs.DressJob(make)
+    status = jobs.drive(job, cancel_requested=esc, report=lambda now, fraction: reports2.append((now, fraction)))
+    assert status == jobs.CANCELLED and job.system is None and cancelled_at
+    assert isinstance(job.error, plumage.PlumageError) and job.error.status_name == "INTERRUPTED", job.error
+    latency = reports2[-1][0] - cancelled_at[0]
+    assert latency <= 0.5, latency
+    print(f"progress ticks {len(reports)}, largest gap {gaps.max():.3f} s; cancel latency {latency:.3f} s")
+
+
+def test_fake_clock_drives_the_loop_and_pc2_round_trips(tmp_path: Path) -> None:
+    """jobs.drive takes its clock, sleep and cancel request from the caller (a
+    cancel at the first tick creates nothing); the .pc2 writer and reader agree."""
+    jobs, pointcache = _addon_module("jobs"), _addon_module("pointcache")
+    verts, tris = uv_sphere()
+    ticks = itertools.count()
+    job = jobs.DressJob(lambda progress: plumage.System(verts, tris, target_feathers=400, progress=progress))
+    seen: list = []
+    status = jobs.drive(job, clock=lambda: float(next(ticks)), sleep=lambda s: None, cancel_requested=lambda now: True,
+                        report=lambda now, fraction: seen.append(now))
+    assert status in (jobs.CANCELLED, jobs.FINISHED)  # FINISHED only if the create ended before its first callback
+    assert seen == [float(i) for i in range(len(seen))]
+    frames = [np.random.default_rng(k).standard_normal((7, 3)).astype(np.float32) for k in range(4)]
+    pointcache.write_pc2(str(tmp_path / "c.pc2"), frames, start_frame=3)
+    samples, start, rate = pointcache.read_pc2(str(tmp_path / "c.pc2"))
+    assert start == 3.0 and rate == 1.0 and np.array_equal(samples, np.stack(frames))
+    assert pointcache.sidecar_path("/x/c.pc2") == "/x/c.plumage.npz"
