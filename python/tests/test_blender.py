@@ -10,6 +10,7 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -99,13 +100,14 @@ def test_addon_without_the_package_says_how_to_install_it(tmp_path: Path) -> Non
         pytest.skip("plumage is importable in Blender's Python from elsewhere (a system-wide install)")
     assert "plumage Python package cannot be imported" in result["import_error"], result
     assert "pip install" in result["import_error"] and "BLENDER_USER_SCRIPTS" in result["import_error"], result
+    assert "python -m plumage.blender_install" in result["import_error"], result
     # the operator's refusal carries the reason, not only "context is incorrect"
     assert "plumage Python package cannot be imported" in result["operator_error"], result
 
 
-def _blender_json(blender: str, args: list, env: dict, timeout: int = 120) -> dict:
+def _blender_json(blender: str, args: list, env: dict, timeout: int = 120, factory: bool = True) -> dict:
     """Runs Blender headless on a test script; its `PLUMAGE_RESULT {json}` line."""
-    run = subprocess.run([blender, "-b", "--factory-startup", "--python-exit-code", "1", *args],
+    run = subprocess.run([blender, "-b", *(["--factory-startup"] if factory else []), "--python-exit-code", "1", *args],
                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=timeout)
     lines = [line for line in run.stdout.splitlines() if line.startswith("PLUMAGE_RESULT ")]
     assert run.returncode == 0 and lines, run.stdout[-4000:]
@@ -229,3 +231,24 @@ def test_fake_clock_drives_the_loop_and_pc2_round_trips(tmp_path: Path) -> None:
     samples, start, rate = pointcache.read_pc2(str(tmp_path / "c.pc2"))
     assert start == 3.0 and rate == 1.0 and np.array_equal(samples, np.stack(frames))
     assert pointcache.sidecar_path("/x/c.pc2") == "/x/c.plumage.npz"
+
+
+def test_blender_install_puts_the_package_where_blender_imports_it(tmp_path: Path) -> None:
+    """`python -m plumage.blender_install --addon blender/plumage_feathers`
+    copies the package into the user modules folder Blender names (here the
+    one BLENDER_USER_SCRIPTS points at) and the add-on into its add-ons; a new
+    Blender then imports both, the add-on without an import error."""
+    blender = _blender()
+    scripts = tmp_path / "scripts"
+    env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config"), "PLUMAGE_BLENDER": blender}
+    env.pop("PYTHONPATH", None)
+    run = subprocess.run([sys.executable, "-m", "plumage.blender_install", "--addon", str(REPO / "blender" / "plumage_feathers")],
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=300)
+    assert run.returncode == 0, run.stdout
+    assert "Blender imports plumage" in run.stdout, run.stdout
+    lib = Path(plumage.library_path()).name
+    assert (scripts / "modules" / "plumage" / lib).is_file() and (scripts / "addons" / "plumage_feathers" / "jobs.py").is_file()
+    check = ("import bpy, json; bpy.ops.preferences.addon_enable(module='plumage_feathers'); import plumage_feathers as a; "
+             "print('PLUMAGE_RESULT ' + json.dumps({'error': a.IMPORT_ERROR, 'file': a.plumage.__file__}))")
+    result = _blender_json(blender, ["--python-expr", check], env, factory=False)  # as a user starts it (its config is empty here)
+    assert result["error"] == "" and result["file"].startswith(str(scripts / "modules")), result
