@@ -534,7 +534,7 @@ class PlumageSettings(bpy.types.PropertyGroup):
         name="Flow",
         items=[
             ("AUTO", "From the mesh", "The library derives the flow from the mesh's principal axis"),
-            ("AXIS", "Object axis", "Feathers point along this axis of the object"),
+            ("AXIS", "Axis", "Feathers point along this world axis (the coat is solved in world space)"),
             ("ATTRIBUTE", "Vertex attribute", "A per-vertex direction attribute"),
         ],
     )
