@@ -596,19 +596,22 @@ class PLUMAGE_OT_dress(bpy.types.Operator):
         if bpy.app.background or context.window is None:
             return self.execute(context)
         try:
-            self._inputs = dress_inputs(context, context.object)
+            self._start(context, context.object)
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        inputs = self._inputs
-        self._object = context.object.name
-        self._job = jobs.DressJob(lambda progress: make_system(inputs, progress))
-        self._job.start()
         wm = context.window_manager
-        wm.progress_begin(0.0, 1.0)
         self._timer = wm.event_timer_add(0.1, window=context.window)  # progress and Esc seen within 0.1 s
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
+
+    def _start(self, context: bpy.types.Context, obj: bpy.types.Object) -> None:
+        """Reads the inputs (here, on the main thread) and starts the create on a worker thread."""
+        self._inputs = inputs = dress_inputs(context, obj)
+        self._object = obj.name
+        self._job = jobs.DressJob(lambda progress: make_system(inputs, progress))
+        self._job.start()
+        context.window_manager.progress_begin(0.0, 1.0)
 
     def _end(self, context: bpy.types.Context) -> None:
         wm = context.window_manager

@@ -138,6 +138,33 @@ def build(addon_zip, out_dir):
     for o in bpy.context.selected_objects:
         o.select_set(False)
     bpy.context.view_layer.objects.active = arm
+    # the modal Dress's own methods (_start, then modal() on timer events and
+    # Esc) with a stand-in for the operator instance: headless Blender has no
+    # window to run it modal; the events are what the window manager sends
+    import time
+    from types import SimpleNamespace
+
+    Op = plumage_feathers.PLUMAGE_OT_dress
+
+    def modal_dress(esc_at_once):
+        reports = []
+        op = SimpleNamespace(_timer=None, report=lambda kind, text: reports.append(text))
+        op._end = lambda context: Op._end(op, context)
+        Op._start(op, bpy.context, arm)
+        events, status = 0, {"RUNNING_MODAL"}
+        while status == {"RUNNING_MODAL"} and events < 600:
+            kind = "ESC" if esc_at_once and events == 0 else "TIMER"
+            status = Op.modal(op, bpy.context, SimpleNamespace(type=kind))
+            events += 1
+            time.sleep(0.02)
+        return status, reports
+
+    status, told = modal_dress(esc_at_once=True)
+    result["modal_cancel"] = {"status": sorted(status), "told": told, "no_run": "Rig" not in plumage_feathers._RUNS,
+                              "no_feathers": "Rig_feathers" not in bpy.data.objects}
+    status, told = modal_dress(esc_at_once=False)
+    modal_state = plumage_feathers._RUNS["Rig"]["system"].save_state()
+    result["modal_finish"] = {"status": sorted(status), "told": told}
     assert bpy.ops.plumage.dress() == {"FINISHED"}
     run = plumage_feathers._RUNS["Rig"]
     system = run["system"]
@@ -145,6 +172,7 @@ def build(addon_zip, out_dir):
     result["sources"] = run["sources"]
     result["counts"] = run["counts"]
     result["feathers"] = system.feather_count
+    result["modal_finish"]["is_dress"] = modal_state == system.save_state()
     result["feathers_object_identity"] = feathers_obj.parent is None and np.allclose(np.array(feathers_obj.matrix_world), np.eye(4))
 
     # shader attributes

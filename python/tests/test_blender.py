@@ -133,6 +133,9 @@ def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening
     assert built["sources"] == ["Crest", "Head", "Torso"]  # two skinned meshes and the bone-parented one, once each
     assert 500 <= built["feathers"] <= 1000 and built["feathers_object_identity"]
     assert all(built["attributes"][k] for k in built["attributes"]), built["attributes"]
+    assert built["modal_cancel"]["status"] == ["CANCELLED"] and built["modal_cancel"]["no_run"] and built["modal_cancel"]["no_feathers"], built
+    assert built["modal_cancel"]["told"] == ["Dress cancelled: nothing changed"], built
+    assert built["modal_finish"]["status"] == ["FINISHED"] and built["modal_finish"]["is_dress"], built
     assert built["job_status"] == "FINISHED" and built["job_is_dress"] and built["job_cancelled"] == "CANCELLED", built
     assert built["attributes"]["material"] == "Plumage feathers"
     frames = built["frames"]
