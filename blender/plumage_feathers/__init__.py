@@ -469,6 +469,8 @@ def bake(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]:
     turns "Play from cache" on. Returns what was written."""
     global _REPLAYING
     scene, props = context.scene, obj.plumage
+    if props.cache_path.startswith("//") and not bpy.data.filepath:
+        raise ValueError(f"the cache {props.cache_path} is relative to the .blend: save the file first, or give an absolute path")
     run = _RUNS[obj.name]
     target = bpy.data.objects[run["target"]]
     frames, positions = [], []

@@ -244,7 +244,13 @@ def build(addon_zip, out_dir):
                       "intersecting_pairs": v.intersecting_pairs, "body_penetrations": v.body_penetrations})
     result["scrub"] = scrub
 
-    # bake next to the saved file, then save it with the cache attached
+    # bake next to the saved file (refused before the file has a place), then save it with the cache attached
+    props.cache_path = "//character.pc2"
+    try:
+        bpy.ops.plumage.bake()
+        result["unsaved_bake_refused"] = ""
+    except RuntimeError as e:
+        result["unsaved_bake_refused"] = str(e)
     blend = out_dir + "/character.blend"
     bpy.ops.wm.save_as_mainfile(filepath=blend)
     props.cache_path = "//character.pc2"

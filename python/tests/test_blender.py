@@ -146,6 +146,7 @@ def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening
     assert [s["frame"] for s in built["scrub"]] == [12, 3, 20, 12]
     for s in built["scrub"]:
         assert s["state_is_playback"] and s["mesh_is_playback"] and s["intersecting_pairs"] == 0 and s["body_penetrations"] == 0, s
+    assert "save the file first" in built["unsaved_bake_refused"], built["unsaved_bake_refused"]
     assert built["cache_shape"][:1] == [20] and built["cache_shape"][2] == 3 and built["cache_first"] == 1.0
     assert built["cache_is_playback"] and all(built["cache_plays"].values()), built["cache_plays"]
     assert (out / "character.pc2").is_file() and (out / "character.plumage.npz").is_file()
