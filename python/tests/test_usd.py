@@ -123,3 +123,41 @@ def test_frame_vertices_are_matched_to_the_rest_order_by_id() -> None:
     assert list(src) == [0, 1, 2, 3, 6, 7, 8, 9]
     with pytest.raises(ValueError, match="vertex count changed"):
         matching_vertices(rest, geometry([10], [5], 0.0))
+
+
+@pytest.mark.parametrize("per", ["vertex", "corner", "none"])
+def test_body_uvs_and_materials(tmp_path, sphere, per) -> None:
+    """write_run without the host: the body gets `st` when UVs are given (per
+    vertex or per triangle corner), both meshes a bound UsdPreviewSurface."""
+    from pxr import UsdShade
+
+    from conftest import wobble
+    from plumage.usd import write_run
+
+    verts, tris = sphere
+    uvs = {"vertex": verts[:, :2] * 0.5 + 0.5, "corner": (verts[:, :2] * 0.5 + 0.5)[tris.ravel()], "none": None}[per]
+    out = tmp_path / "run.usda"
+    with plumage.System(verts, tris, target_feathers=300, seed=2) as s:
+        write_run(out, s, verts, tris, [wobble(verts, k) for k in (1, 2)], [1 / 24, 2 / 24], 24.0, body_uvs=uvs)
+    stage = Usd.Stage.Open(str(out))
+    body, feathers = stage.GetPrimAtPath("/Plumage/Body"), stage.GetPrimAtPath("/Plumage/Feathers")
+    st = UsdGeom.PrimvarsAPI(body).GetPrimvar("st")
+    if uvs is None:
+        assert not st.IsDefined()
+    else:
+        assert st.GetInterpolation() == (UsdGeom.Tokens.vertex if per == "vertex" else UsdGeom.Tokens.faceVarying)
+        assert np.array_equal(np.array(st.Get(), dtype=np.float32), uvs.astype(np.float32))
+    for prim, name in ((body, "Body"), (feathers, "Feathers")):
+        material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        assert material and material.GetPath() == f"/Plumage/Materials/{name}"
+        shader = material.ComputeSurfaceSource()[0]
+        assert shader.GetIdAttr().Get() == "UsdPreviewSurface"
+        assert material.GetInput("frame:stPrimvarName").Get() == "st"
+
+
+def test_body_uvs_of_the_wrong_length_are_refused(tmp_path, sphere) -> None:
+    from plumage.usd import write_run
+
+    verts, tris = sphere
+    with plumage.System(verts, tris, target_feathers=200) as s, pytest.raises(ValueError, match="body_uvs"):
+        write_run(tmp_path / "x.usda", s, verts, tris, [verts], [0.0], 24.0, body_uvs=np.zeros((5, 2)))

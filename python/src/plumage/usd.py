@@ -12,6 +12,13 @@ Layout of the stage:
                        shaft, v across the vanes), `id` (int64, the library's
                        64-bit id reinterpreted as signed, uniform: one per
                        triangle) and `featherIndex` (int, vertex)
+    /Plumage/Materials/Body, /Plumage/Materials/Feathers
+                       UsdPreviewSurface materials bound to the two meshes
+                       (UsdShade.MaterialBindingAPI); each reads the `st`
+                       primvar (`inputs:frame:stPrimvarName`) for a texture
+                       a user connects. The body has `st` too when the input
+                       mesh has UVs (`body_uvs`: per vertex, or per triangle
+                       corner as faceVarying).
 
 Time codes are clip seconds × fps, with timeCodesPerSecond = fps.
 """
@@ -27,7 +34,7 @@ import numpy.typing as npt
 from .system import FeatherGeometry, System, vertex_normals
 
 try:
-    from pxr import Gf, Sdf, Usd, UsdGeom, Vt  # type: ignore[import-untyped]
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, Vt  # type: ignore[import-untyped]
 except ImportError as e:  # pragma: no cover - exercised only without usd-core
     raise ImportError("plumage.usd needs the usd-core package: pip install usd-core") from e
 
@@ -72,6 +79,8 @@ class UsdWriter:
         body_triangles: np.ndarray,
         feathers_rest: FeatherGeometry,
         up_axis: str = "Y",
+        *,
+        body_uvs: Optional[npt.ArrayLike] = None,
     ) -> None:
         self.path = str(path)
         self.stage = Usd.Stage.CreateNew(self.path)
@@ -102,6 +111,33 @@ class UsdWriter:
         self._feather_points = feathers_rest.positions
         self._feather_normals = feathers_rest.normals
         self.time_codes: List[float] = []
+        if body_uvs is not None:
+            self._body_st(np.asarray(body_uvs, dtype=np.float32))
+        self._bind(self.body, "Body", (0.8, 0.62, 0.5), 0.7)
+        self._bind(self.feathers, "Feathers", (0.45, 0.3, 0.18), 0.55)
+
+    def _body_st(self, uvs: np.ndarray) -> None:
+        """`primvars:st` of the body: one UV per vertex, or one per triangle corner."""
+        n, m = len(self.body.GetPointsAttr().Get()), len(self.body_triangles)
+        if uvs.ndim == 1 and uvs.size % 2 == 0:
+            uvs = uvs.reshape(-1, 2)
+        uvs = np.ascontiguousarray(uvs, dtype=np.float32)
+        if uvs.ndim != 2 or uvs.shape[1] != 2 or len(uvs) not in (n, 3 * m):
+            raise ValueError(f"body_uvs: expected ({n}, 2) per vertex or ({3 * m}, 2) per triangle corner, got {uvs.shape}")
+        interpolation = UsdGeom.Tokens.vertex if len(uvs) == n else UsdGeom.Tokens.faceVarying
+        st = UsdGeom.PrimvarsAPI(self.body.GetPrim()).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, interpolation)
+        st.Set(Vt.Vec2fArray.FromNumpy(uvs))
+
+    def _bind(self, mesh: "UsdGeom.Mesh", name: str, colour: "tuple[float, float, float]", roughness: float) -> None:
+        """A UsdPreviewSurface material at /Plumage/Materials/NAME bound to `mesh`."""
+        material = UsdShade.Material.Define(self.stage, f"/Plumage/Materials/{name}")
+        material.CreateInput("frame:stPrimvarName", Sdf.ValueTypeNames.Token).Set("st")
+        shader = UsdShade.Shader.Define(self.stage, f"/Plumage/Materials/{name}/PreviewSurface")
+        shader.CreateIdAttr("UsdPreviewSurface")
+        shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*colour))
+        shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(roughness)
+        material.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
 
     def _mesh(self, path: str, points: np.ndarray, triangles: np.ndarray, normals: Optional[np.ndarray] = None) -> "UsdGeom.Mesh":
         mesh = UsdGeom.Mesh.Define(self.stage, path)
@@ -149,9 +185,12 @@ def write_run(
     frames: Union[Sequence[np.ndarray], np.ndarray],
     times: Union[Sequence[float], np.ndarray],
     fps: float,
+    *,
+    body_uvs: Optional[npt.ArrayLike] = None,
 ) -> None:
-    """Steps `system` through `frames` (at clip `times`) and writes the run."""
-    writer = UsdWriter(path, fps, rest, triangles, system.feather_geometry())
+    """Steps `system` through `frames` (at clip `times`) and writes the run
+    (`body_uvs`: the input mesh's UVs, per vertex or per triangle corner)."""
+    writer = UsdWriter(path, fps, rest, triangles, system.feather_geometry(), body_uvs=body_uvs)
     for seconds, frame in zip(times, frames):
         system.step(frame)
         writer.add_frame(float(seconds), frame, system.feather_geometry())
