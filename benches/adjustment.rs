@@ -19,7 +19,7 @@ use plumage::adjustment::{
 use plumage::body::BodyIndex;
 use plumage::coat::{Coat, Dressing};
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
-use plumage::field::Fields;
+use plumage::field::{Fields, VertexMaps};
 use plumage::frame::{Workspace, solve};
 use plumage::geometry::RootFrame;
 use plumage::mesh::{MeshInput, weld};
@@ -78,7 +78,7 @@ impl Scene {
         let config = Config { target_feathers: 2000, threads: 1, flow_source: Some(head), ..Config::default() };
         let mesh = weld(&MeshInput::new(&model.positions, &model.indices)).ok()?;
         let surface = Surface::new(&mesh);
-        let fields = Fields::new(&mesh, &surface, None, None, None, None, &config).ok()?;
+        let fields = Fields::new(&mesh, &surface, &VertexMaps::default(), &config).ok()?;
         let sampling = sample_roots_with_progress(&mesh, &surface, &fields, &config, &Progress::none()).ok()?;
         let dressing = Dressing::new(surface, &mesh, sampling.roots, &config);
         let mut coat = Coat::default();

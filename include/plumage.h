@@ -548,6 +548,49 @@ typedef struct PlumageConfig {
 typedef uint32_t PlumageStatus;
 
 /**
+ * A skeleton and the skin weights binding the mesh's vertices to it, for
+ * the orientation field. Joint positions are at the rest pose, in the
+ * same space as the mesh's positions (for glTF: the joint nodes' world
+ * positions in the pose the rest positions were taken in). Joints no
+ * vertex is weighted to and with no weighted ancestor are ignored; each
+ * remaining tree of joints is walked from its head, so that every bone
+ * points away from it.
+ */
+typedef struct PlumageSkeleton {
+  /**
+   * Number of joints (1 to 65536).
+   */
+  uint32_t joint_count;
+  /**
+   * Joints each vertex is weighted to (1 to 16; glTF's JOINTS_0 gives 4).
+   */
+  uint32_t influences;
+  /**
+   * xyz per joint, `3 * joint_count` floats.
+   */
+  const float *joint_positions;
+  /**
+   * Per joint, its parent's index, or -1 for a root.
+   */
+  const int32_t *joint_parents;
+  /**
+   * `influences` joint indices per vertex (`influences * vertex_count`).
+   */
+  const uint32_t *vertex_joints;
+  /**
+   * `influences` weights per vertex, finite and >= 0.
+   */
+  const float *vertex_weights;
+  /**
+   * The joint the flow starts from (the tip of the head or the beak), or
+   * -1: the end joint (one bone attached) farthest against
+   * `PlumageConfig.flow_axis` when that is set, else farthest up and
+   * forward (+Y plus +Z, glTF's conventions).
+   */
+  int32_t head_joint;
+} PlumageSkeleton;
+
+/**
  * A mesh handed to `plumage_system_create`, in the caller's own numbering.
  * Triangle soups (vertices split along UV or normal seams) are welded by
  * position internally. Fill with `plumage_mesh_desc_init` first.
@@ -589,6 +632,18 @@ typedef struct PlumageMeshDesc {
    * Optional feather width multiplier per vertex; may be NULL.
    */
   const float *width_scale;
+  /**
+   * Optional skeleton the vertices are skinned to; may be NULL. Without
+   * `orientations` or a `flow_source`, feathers then run from the head
+   * down the trunk and out along every limb (see `PlumageSkeleton`).
+   */
+  const struct PlumageSkeleton *skeleton;
+  /**
+   * Optional layer per vertex (any finite value); may be NULL. Where two
+   * neighbouring feathers' layers differ, the one on the higher layer
+   * lies on top, whatever the growth priority says; equal layers keep it.
+   */
+  const float *layer;
 } PlumageMeshDesc;
 
 /**
@@ -625,6 +680,15 @@ typedef struct PlumageSamplingStats {
    * Wall time of sampling.
    */
   double seconds;
+  /**
+   * Faces of the feathered skin round which the rest orientation field
+   * turns (appended): its sources, sinks, whorls and saddles.
+   */
+  uint32_t field_singularities;
+  /**
+   * Always 0 (keeps the struct free of padding bytes).
+   */
+  uint32_t reserved;
 } PlumageSamplingStats;
 
 /**
@@ -898,6 +962,13 @@ typedef struct PlumageValidation {
    * counted in `stack_efficiency`).
    */
   double stack_depth_median;
+  /**
+   * Percentage of the feathers whose heading (the shaft's direction in
+   * the skin's tangent plane) turns more than 45 degrees from the mean
+   * heading of their 8 nearest neighbours (appended): whorls, partings
+   * and crowns where the orientation field turns sharply.
+   */
+  double discord_percent;
 } PlumageValidation;
 
 /**

@@ -32,6 +32,22 @@ const SMOOTHING_ITERATIONS: usize = 4;
 /// spacing changes over a few rings of vertices rather than at one.
 const CURVATURE_SMOOTHING: usize = 2;
 
+/// The per-vertex arrays the fields are built from, each optional, per
+/// welded vertex.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexMaps<'a> {
+    /// xyz tangent hints, used as given (projected, not smoothed).
+    pub orientations: Option<&'a [f32]>,
+    /// xyz flow from the skeleton ([`crate::skeleton::SkeletonInput::flow_hints`]).
+    pub skeleton_flow: Option<&'a [f32]>,
+    /// Spacing multipliers (0 = bare skin).
+    pub spacing_scale: Option<&'a [f32]>,
+    /// Feather length multipliers.
+    pub length_scale: Option<&'a [f32]>,
+    /// Feather width multipliers.
+    pub width_scale: Option<&'a [f32]>,
+}
+
 /// Per-vertex fields of one welded mesh.
 #[derive(Clone, Debug)]
 pub struct Fields {
@@ -42,21 +58,13 @@ pub struct Fields {
 }
 
 impl Fields {
-    /// Builds the fields. All arrays are per *welded* vertex (use
-    /// [`WeldedMesh::weld_attribute`]): `orientations` holds xyz tangent
-    /// hints, the others one multiplier each (finite, ≥ 0). Missing
-    /// multipliers are 1; missing hints are derived from `config.flow_axis`.
-    /// `config` is checked by [`Config::validate`], the one rule for its
-    /// fields (the flow axis among them).
-    pub fn new(
-        mesh: &WeldedMesh,
-        surface: &Surface,
-        orientations: Option<&[f32]>,
-        spacing_scale: Option<&[f32]>,
-        length_scale: Option<&[f32]>,
-        width_scale: Option<&[f32]>,
-        config: &Config,
-    ) -> Result<Self> {
+    /// Builds the fields from `maps` (per *welded* vertex: use
+    /// [`WeldedMesh::weld_attribute`]). The orientation field is, in order of
+    /// precedence: the hints as given; the flow away from
+    /// `config.flow_source`; the skeleton's flow; `config.flow_axis` (derived
+    /// when zero). Derived flows are projected and smoothed. `config` is
+    /// checked by [`Config::validate`], the one rule for its fields.
+    pub fn new(mesh: &WeldedMesh, surface: &Surface, maps: &VertexMaps<'_>, config: &Config) -> Result<Self> {
         config.validate()?;
         let n = mesh.positions.len();
         if surface.vertex_count() != n {
@@ -66,7 +74,7 @@ impl Fields {
             ));
         }
         let normals = surface.rest_vertex_normals();
-        let directions = match orientations {
+        let directions = match maps.orientations {
             Some(hints) => {
                 check_values("orientations", hints, 3 * n, false)?;
                 let hints: Vec<Vec3> = hints.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
@@ -78,9 +86,13 @@ impl Fields {
                 // A checked config's axis is finite and not tiny, or zero:
                 // derived, always a unit vector.
                 let axis = if config.flow_axis == Vec3::ZERO { principal_flow_axis(mesh) } else { config.flow_axis };
-                let flow = match config.flow_source {
-                    Some(source) => flow_from_source(mesh, surface, source, axis),
-                    None => vec![axis; n],
+                let flow = match (config.flow_source, maps.skeleton_flow) {
+                    (Some(source), _) => flow_from_source(mesh, surface, source, axis),
+                    (None, Some(bones)) => {
+                        check_values("skeleton flow", bones, 3 * n, false)?;
+                        bones.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
+                    }
+                    (None, None) => vec![axis; n],
                 };
                 let mut dirs = project_onto_tangent_planes(&flow, normals);
                 fill_from_neighbours(surface, normals, &mut dirs);
@@ -88,7 +100,7 @@ impl Fields {
                 smooth_directions(surface, normals, dirs, SMOOTHING_ITERATIONS)
             }
         };
-        let mut spacing_scale = multiplier("spacing_scale", spacing_scale, n)?;
+        let mut spacing_scale = multiplier("spacing_scale", maps.spacing_scale, n)?;
         if config.curvature_min_scale < 1.0 && config.feather_length <= 0.0 {
             let length = nominal_feather_length(surface, config);
             let bend = curvature_spacing(mesh, surface, normals, length, config.curvature_min_scale);
@@ -100,8 +112,8 @@ impl Fields {
         Ok(Self {
             directions,
             spacing_scale,
-            length_scale: clamped(multiplier("length_scale", length_scale, n)?),
-            width_scale: clamped(multiplier("width_scale", width_scale, n)?),
+            length_scale: clamped(multiplier("length_scale", maps.length_scale, n)?),
+            width_scale: clamped(multiplier("width_scale", maps.width_scale, n)?),
         })
     }
 
@@ -171,7 +183,8 @@ impl Fields {
     }
 }
 
-fn blend_at(values: &[f32], surface: &Surface, p: SurfacePoint) -> f32 {
+/// The barycentric blend at `p` of per-vertex `values`.
+pub(crate) fn blend_at(values: &[f32], surface: &Surface, p: SurfacePoint) -> f32 {
     let tri = surface.triangles()[p.face as usize];
     (0..3).map(|k| values[tri[k] as usize] * p.bary[k]).sum()
 }
@@ -450,13 +463,13 @@ mod tests {
         let mesh = plate();
         let s = Surface::new(&mesh);
         let cfg = Config { flow_axis: Vec3::new(1.0, 0.0, 5.0), ..Config::default() };
-        let f = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap();
+        let f = Fields::new(&mesh, &s, &VertexMaps::default(), &cfg).unwrap();
         for d in f.vertex_directions() {
             assert!((*d - Vec3::X).length() < 1e-5, "{d:?}");
         }
         // Axis along the normal everywhere: still unit tangents, no NaN.
         let cfg = Config { flow_axis: Vec3::Z, ..Config::default() };
-        let f = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap();
+        let f = Fields::new(&mesh, &s, &VertexMaps::default(), &cfg).unwrap();
         for d in f.vertex_directions() {
             assert!((d.length() - 1.0).abs() < 1e-5 && d.z.abs() < 1e-5);
         }
@@ -468,7 +481,7 @@ mod tests {
         let s = Surface::new(&mesh);
         for flow_axis in [Vec3::new(f32::NAN, 0.0, 0.0), Vec3::new(1e-9, 0.0, 0.0)] {
             let cfg = Config { flow_axis, ..Config::default() };
-            let e = Fields::new(&mesh, &s, None, None, None, None, &cfg).unwrap_err();
+            let e = Fields::new(&mesh, &s, &VertexMaps::default(), &cfg).unwrap_err();
             assert_eq!(e.kind(), ErrorKind::InvalidArgument);
             assert!(e.message().contains("flow_axis"), "{}", e.message());
         }
@@ -480,7 +493,13 @@ mod tests {
         let s = Surface::new(&mesh);
         // Vertex 2's hint is zero: it takes its neighbours' direction.
         let hints = [0.0, 1.0, 3.0, 0.0, 2.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0];
-        let f = Fields::new(&mesh, &s, Some(&hints), None, None, None, &Config::default()).unwrap();
+        let f = Fields::new(
+            &mesh,
+            &s,
+            &VertexMaps { orientations: Some(&hints), ..Default::default() },
+            &Config::default(),
+        )
+        .unwrap();
         for d in f.vertex_directions() {
             assert!((*d - Vec3::Y).length() < 1e-5, "{d:?}");
         }
@@ -514,7 +533,7 @@ mod tests {
         let config = Config { spacing: 1.0, ..Config::default() };
         let scales = |mesh: &WeldedMesh, config: &Config| {
             let s = Surface::new(mesh);
-            Fields::new(mesh, &s, None, None, None, None, config).unwrap().vertex_spacing_scales().to_vec()
+            Fields::new(mesh, &s, &VertexMaps::default(), config).unwrap().vertex_spacing_scales().to_vec()
         };
         // A leg of radius 0.5 under feathers 4 long: every vertex at the limit.
         for &x in &scales(&thin, &config) {
@@ -533,11 +552,25 @@ mod tests {
         let mesh = plate();
         let s = Surface::new(&mesh);
         let scale = [0.0, 2.0, 2.0, 2.0];
-        let f = Fields::new(&mesh, &s, None, Some(&scale), None, None, &Config::default()).unwrap();
+        let f = Fields::new(
+            &mesh,
+            &s,
+            &VertexMaps { spacing_scale: Some(&scale), ..Default::default() },
+            &Config::default(),
+        )
+        .unwrap();
         let near_bare = SurfacePoint { face: 0, bary: [0.4, 0.3, 0.3] };
         assert_eq!(f.spacing_scale_at(&s, near_bare), Some(2.0));
         let bare = SurfacePoint { face: 0, bary: [0.6, 0.2, 0.2] };
         assert_eq!(f.spacing_scale_at(&s, bare), None);
-        assert!(Fields::new(&mesh, &s, None, Some(&[1.0; 3]), None, None, &Config::default()).is_err());
+        assert!(
+            Fields::new(
+                &mesh,
+                &s,
+                &VertexMaps { spacing_scale: Some(&[1.0; 3]), ..Default::default() },
+                &Config::default()
+            )
+            .is_err()
+        );
     }
 }

@@ -14,6 +14,9 @@ pub struct SamplingReport {
     pub coverage_gap: f32,
     /// mean of cos 4(φ − θ) over each root's 4 nearest neighbours.
     pub alignment: f32,
+    /// Faces of the feathered skin round which the rest orientation field
+    /// turns ([`crate::validation::field_singularities`]).
+    pub field_singularities: usize,
     /// Wall time of sampling.
     pub seconds: f64,
 }
@@ -150,6 +153,9 @@ pub struct ValidationReport {
     pub stack_efficiency: f64,
     /// Median number of feathers beneath a placed feather's tip.
     pub stack_depth_median: f64,
+    /// Percentage of feathers whose heading turns more than 45° from their
+    /// 8 nearest neighbours' mean ([`crate::validation::groom`]).
+    pub discord_percent: f64,
 }
 
 /// One feather as the host sees it.

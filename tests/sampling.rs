@@ -6,7 +6,7 @@ mod common;
 use common::gltf_mesh::load_model;
 use common::shapes::{Shape, grid, thin_box};
 use glam::Vec3;
-use plumage::field::Fields;
+use plumage::field::{Fields, VertexMaps};
 use plumage::mesh::{MeshInput, WeldedMesh, weld};
 use plumage::sampling::{Sampling, sample_roots};
 use plumage::surface::Surface;
@@ -26,7 +26,13 @@ fn dress(shape: &Shape, spacing_scale: Option<&[f32]>, config: &Config) -> Dress
     let mesh = weld(&input).unwrap();
     let surface = Surface::new(&mesh);
     let welded_scale = spacing_scale.map(|s| mesh.weld_attribute(s, 1));
-    let fields = Fields::new(&mesh, &surface, None, welded_scale.as_deref(), None, None, config).unwrap();
+    let fields = Fields::new(
+        &mesh,
+        &surface,
+        &VertexMaps { spacing_scale: welded_scale.as_deref(), ..Default::default() },
+        config,
+    )
+    .unwrap();
     Dressed { mesh, surface, fields }
 }
 

@@ -502,6 +502,35 @@ void GltfScene::evaluate(const Clip* clip, double seconds, std::vector<float>& x
     for (size_t v = 0; v < p.size() / 3; ++v) store(posed_vertex(v, {p[3 * v], p[3 * v + 1], p[3 * v + 2]}, maps), v, xyz);
 }
 
+std::optional<SkinSkeleton> GltfScene::skeleton() const {
+    if (!skinned()) return std::nullopt;
+    SkinSkeleton s;
+    const std::vector<Mat4> global = global_transforms(nodes_);
+    std::vector<int> joint_of_node(nodes_.size(), -1);
+    for (size_t j = 0; j < joints_.size(); ++j) joint_of_node[static_cast<size_t>(joints_[j])] = static_cast<int>(j);
+    for (size_t j = 0; j < joints_.size(); ++j) {
+        const Mat4& m = global[static_cast<size_t>(joints_[j])];
+        for (int r = 0; r < 3; ++r) s.joint_positions.push_back(static_cast<float>(m.at(r, 3)));
+        // The parent joint is the nearest ancestor node that is a joint.
+        int up = parent_[static_cast<size_t>(joints_[j])];
+        while (up >= 0 && joint_of_node[static_cast<size_t>(up)] < 0) up = parent_[static_cast<size_t>(up)];
+        s.joint_parents.push_back(up < 0 ? -1 : joint_of_node[static_cast<size_t>(up)]);
+    }
+    const size_t n = influence_begin_.size() - 1;
+    size_t width = 1;
+    for (size_t v = 0; v < n; ++v) width = std::max(width, influence_begin_[v + 1] - influence_begin_[v]);
+    s.influences = static_cast<uint32_t>(std::min<size_t>(width, 16));
+    for (size_t v = 0; v < n; ++v) {
+        for (size_t k = 0; k < s.influences; ++k) {
+            const size_t at = influence_begin_[v] + k;
+            const bool used = at < influence_begin_[v + 1];
+            s.vertex_joints.push_back(used ? influences_[at].joint : 0);
+            s.vertex_weights.push_back(used ? static_cast<float>(influences_[at].weight) : 0.0f);
+        }
+    }
+    return s;
+}
+
 std::vector<float> GltfScene::rest_directions(const tinygltf::Model& model, const std::string& name, int first) const {
     const std::vector<float> mesh_space = vertex_attribute(model, name, first, 3);
     const std::vector<Mat4> maps = vertex_maps(global_transforms(nodes_));

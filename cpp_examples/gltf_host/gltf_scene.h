@@ -52,6 +52,9 @@ public:
     // rest_positions() are: by the node transforms and the skin.
     std::vector<float> rest_directions(const tinygltf::Model& model, const std::string& name, int first) const;
 
+    // The skin's joints at the rest pose and every vertex's influences.
+    std::optional<SkinSkeleton> skeleton() const override;
+
     int mesh_index() const { return mesh_index_; }
     bool skinned() const { return !joints_.empty(); }
     size_t morph_target_count() const { return target_deltas_.size(); }

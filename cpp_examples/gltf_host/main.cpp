@@ -32,7 +32,7 @@ VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const
     };
     const VertexMapSpec& flow = opt.flow_map;
     std::vector<float> directions = flow.attribute.empty() ? std::vector<float>{} : scene.rest_directions(model, flow.attribute, flow.first);
-    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions)};
+    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions), read(opt.layer_map), std::nullopt};
 }
 
 // The input mesh's material, with the UVs its base colour texture needs.
@@ -66,7 +66,7 @@ Subject open_subject(const Options& opt, VertexMaps& maps) {
         for (int m : chosen) {
             auto scene = std::make_unique<GltfScene>(model, m, opt.animation);
             VertexMaps part = read_maps(*scene, model, opt);
-            for (auto [to, from] : {std::pair{&all.spacing, &part.spacing}, {&all.length, &part.length}, {&all.width, &part.width}, {&all.flow, &part.flow}}) {
+            for (auto [to, from] : {std::pair{&all.spacing, &part.spacing}, {&all.length, &part.length}, {&all.width, &part.width}, {&all.flow, &part.flow}, {&all.layer, &part.layer}}) {
                 to->insert(to->end(), from->begin(), from->end());
             }
             s.materials.push_back(mesh_material(model, *scene));
@@ -139,14 +139,17 @@ std::vector<double> frame_times(const Options& opt, const std::optional<ClipInfo
     return times;
 }
 
-nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, const std::optional<ClipInfo>& clip, size_t frames) {
+nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, const std::optional<ClipInfo>& clip, size_t frames, const VertexMaps& vertex_maps) {
     nlohmann::ordered_json j = config_to_json(cfg);
+    // Where the orientation field comes from (the library's precedence).
+    j["flow_from"] = !vertex_maps.flow.empty() ? "flow_map" : cfg.flow_source_enabled ? "flow_source" : vertex_maps.skeleton ? "skeleton" : "flow_axis";
+    if (vertex_maps.skeleton) j["skeleton_joints"] = vertex_maps.skeleton->joint_count();
     j["fps"] = opt.fps;
     j["start"] = opt.start;
     j["frames"] = frames;
     j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
                           : nlohmann::ordered_json(nullptr);
-    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}, {"flow_map", &opt.flow_map}};
+    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}, {"flow_map", &opt.flow_map}, {"layer_map", &opt.layer_map}};
     for (const auto& [key, m] : maps) {
         if (!m->attribute.empty()) j[key] = m->attribute + ":" + std::to_string(m->first);
     }
@@ -155,14 +158,17 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
     return j;
 }
 
-// With no flow given (--flow, --flow-source or --flow-map), feathers flow
-// from the front of the model to its back: the source is the rest vertex
-// farthest along the way the model faces (+Z for glTF; the lowest index
-// among equals), and the library's flow away from it along the surface
-// runs down the body, the limbs and the tail.
-void default_flow_from_front(const Options& opt, const AnimatedMesh& subject, PlumageConfig& cfg) {
+// With no flow given (--flow, --flow-source or --flow-map), a skinned
+// subject's feathers follow its skeleton (the library walks the bones from
+// the head); any other's flow from the front of the model to its back: the
+// source is the rest vertex farthest along the way the model faces (+Z for
+// glTF; the lowest index among equals), and the library's flow away from
+// it along the surface runs down the body, the limbs and the tail.
+void default_flow(const Options& opt, const AnimatedMesh& subject, PlumageConfig& cfg, VertexMaps& maps) {
     const std::vector<float>& rest = subject.rest_positions();
     if (opt.flow || opt.flow_source || !opt.flow_map.attribute.empty() || rest.empty()) return;
+    if (opt.skeleton_flow) maps.skeleton = subject.skeleton();
+    if (maps.skeleton) return;
     const std::array<float, 3> f = subject.facing();
     const auto ahead = [&](size_t v) { return rest[3 * v] * f[0] + rest[3 * v + 1] * f[1] + rest[3 * v + 2] * f[2]; };
     size_t front = 0;
@@ -192,11 +198,11 @@ public:
 
     void create_rest_pose() {
         PlumageConfig cfg = make_config(opt_);
-        default_flow_from_front(opt_, *subject_, cfg);
+        default_flow(opt_, *subject_, cfg, maps_);
         cfg.progress = &ProgressLine::library_callback;
         cfg.progress_user_data = &progress_;
         report_.set_subject(opt_.input.empty() ? "builtin:procedural_body" : opt_.input, subject_->mesh_name(), subject_->vertex_count(),
-                            subject_->triangle_count(), run_config(cfg, opt_, clip_, times_.size()));
+                            subject_->triangle_count(), run_config(cfg, opt_, clip_, times_.size(), maps_));
         progress_.set_context("rest pose");
         const Stopwatch create_clock;
         sys_ = create_system(cfg, subject_->rest_positions(), subject_->triangles(), maps_);

@@ -49,6 +49,18 @@ public:
         }
     }
     std::array<float, 3> facing() const override { return meshes_.front()->facing(); }
+    // Every mesh's skeleton, one after the other (each its own trees of
+    // joints); none unless every mesh is skinned.
+    std::optional<SkinSkeleton> skeleton() const override {
+        std::optional<SkinSkeleton> all;
+        for (const auto& mesh : meshes_) {
+            std::optional<SkinSkeleton> s = mesh->skeleton();
+            if (!s) return std::nullopt;
+            if (all) all->append(*s);
+            else all = std::move(s);
+        }
+        return all;
+    }
 
     const std::vector<MeshPart>& parts() const { return parts_; }
     const AnimatedMesh& mesh(size_t m) const { return *meshes_[m]; }

@@ -101,7 +101,7 @@ bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--memory-limit",  "--validate", "--out", "--report", "--poses", "--instances",
                                            "--model-resolution", "--drift-tolerance", "--settle-rate", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
-                                           "--spacing-map", "--length-map", "--width-map", "--flow-map"};
+                                           "--spacing-map", "--length-map", "--width-map", "--flow-map", "--layer-map", "--skeleton-flow"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -145,8 +145,10 @@ std::string usage_text() {
            "  --feathers N         target feather count (or --spacing D: root spacing in model units)\n"
            "  --sampler guided|random   --theta DEG   --seed S   --flow X,Y,Z\n"
            "  --flow-source X,Y,Z  feathers flow away from this point along the surface (e.g. the head); with no\n"
-           "                       --flow, --flow-source or --flow-map the source is the front-most rest vertex\n"
-           "                       (glTF models face +Z; the built-in model faces -X), so feathers run head to tail\n"
+           "                       --flow, --flow-source or --flow-map, a skinned mesh's feathers follow its bones\n"
+           "                       from the head down the trunk and each limb; other meshes flow away from the\n"
+           "                       front-most rest vertex (glTF models face +Z; the built-in model faces -X)\n"
+           "  --skeleton-flow on|off   off: a skinned mesh flows from its front-most vertex too (default on)\n"
            "  --mode incremental|legacy|rebuild   --threads T (0 = all cores)\n"
            "  --memory-limit MIB   most heap the library's system may hold (default: no limit); create or a step\n"
            "                       that would pass it is refused (LIMIT_EXCEEDED)\n"
@@ -166,6 +168,7 @@ std::string usage_text() {
            "                       vector, default 0; e.g. _FEATHER_DENSITY or COLOR_0:0): 2 = half as dense, 0 = bare skin\n"
            "  --length-map NAME[:C]  --width-map NAME[:C]   per-vertex feather length and width multipliers\n"
            "  --flow-map NAME[:C]  per-vertex flow direction from components C..C+2 of vertex attribute NAME\n"
+           "  --layer-map NAME[:C]  per-vertex layer: where neighbours' layers differ, the higher lies on top\n"
            "                       (e.g. a custom _FLOW), in the mesh's own space; overrides --flow and --flow-source\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
@@ -244,6 +247,8 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--length-map") o.length_map = parse_map(arg, value);
         else if (arg == "--width-map") o.width_map = parse_map(arg, value);
         else if (arg == "--flow-map") o.flow_map = parse_map(arg, value);
+        else if (arg == "--layer-map") o.layer_map = parse_map(arg, value);
+        else if (arg == "--skeleton-flow") o.skeleton_flow = parse_choice(arg, value, {"on", "off"}, {1u, 0u}) != 0;
         else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
         else if (arg == "--report") o.report = value;
@@ -252,7 +257,7 @@ Options parse_options(int argc, const char* const* argv) {
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--instances" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
-    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map}) {
+    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map, &o.layer_map}) {
         if (!m->attribute.empty() && o.input.empty()) throw UsageError(m->option + " reads a vertex attribute of a glTF input; the built-in model has none");
     }
     if (o.model_resolution && !o.input.empty()) throw UsageError("--model-resolution applies to the built-in model only, not to " + o.input);

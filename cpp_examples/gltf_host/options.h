@@ -51,6 +51,8 @@ struct Options {
     VertexMapSpec length_map;
     VertexMapSpec width_map;
     VertexMapSpec flow_map;
+    VertexMapSpec layer_map;
+    bool skeleton_flow = true;  // --skeleton-flow on|off
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;
     std::string report;

@@ -69,6 +69,19 @@ SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& p
     mesh.length_scale = map(maps.length);
     mesh.width_scale = map(maps.width);
     mesh.orientations = map(maps.flow);
+    mesh.layer = map(maps.layer);
+    PlumageSkeleton skeleton{};
+    if (maps.skeleton) {
+        const SkinSkeleton& s = *maps.skeleton;
+        skeleton.joint_count = static_cast<uint32_t>(s.joint_count());
+        skeleton.influences = s.influences;
+        skeleton.joint_positions = s.joint_positions.data();
+        skeleton.joint_parents = s.joint_parents.data();
+        skeleton.vertex_joints = s.vertex_joints.data();
+        skeleton.vertex_weights = s.vertex_weights.data();
+        skeleton.head_joint = -1;
+        mesh.skeleton = &skeleton;
+    }
     PlumageSystem* raw = nullptr;
     const uint32_t status = plumage_system_create(&cfg, &mesh, &raw);
     SystemHandle sys(raw);  // owned before anything can throw

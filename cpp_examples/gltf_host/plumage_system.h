@@ -2,6 +2,7 @@
 // turned into LibraryError, the copy-out protocol and the stats queries.
 #pragma once
 
+#include "animated_mesh.h"
 #include "plumage.h"
 
 #include <cstddef>
@@ -46,6 +47,8 @@ struct VertexMaps {
     std::vector<float> length;
     std::vector<float> width;
     std::vector<float> flow;
+    std::vector<float> layer;  // painted layers: the higher lies on top
+    std::optional<SkinSkeleton> skeleton;  // the flow follows its bones
 };
 
 SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices,

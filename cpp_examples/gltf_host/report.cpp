@@ -33,6 +33,7 @@ void put_validation(json& j, const PlumageValidation& v) {
     if (PLUMAGE_FILLED(v, bristle_percent)) put(j, "bristle_percent", v.bristle_percent);
     if (PLUMAGE_FILLED(v, stack_efficiency)) put(j, "stack_efficiency", v.stack_efficiency);
     if (PLUMAGE_FILLED(v, stack_depth_median)) put(j, "stack_depth_median", v.stack_depth_median);
+    if (PLUMAGE_FILLED(v, discord_percent)) put(j, "discord_percent", v.discord_percent);
 }
 
 // The adjustment's figures, shared by `static` and each frame.
@@ -101,6 +102,7 @@ json summarise(const json& frames, bool whole) {
     add("max_tip_height_p90", "tip_height_p90", 2);
     add("max_bristle_percent", "bristle_percent", 2);
     add("max_stack_efficiency", "stack_efficiency", 2);
+    add("max_discord_percent", "discord_percent", 2);
     add("mean_pops_percent", "pops_percent", 0);
     add("max_pops_percent", "pops_percent", 2);
     return s;
@@ -165,6 +167,7 @@ void Report::set_sampling(const std::optional<PlumageSamplingStats>& s) {
     if (PLUMAGE_FILLED(*s, relative_radius)) put(sampling_, "relative_radius", tidy(s->relative_radius));
     if (PLUMAGE_FILLED(*s, coverage_gap)) put(sampling_, "coverage_gap", tidy(s->coverage_gap));
     if (PLUMAGE_FILLED(*s, alignment)) put(sampling_, "alignment", tidy(s->alignment));
+    if (PLUMAGE_FILLED(*s, field_singularities)) sampling_["field_singularities"] = s->field_singularities;
 }
 
 void Report::set_ordering(const std::optional<PlumageOrderingStats>& s) {

@@ -34,6 +34,9 @@ pub struct Dressing {
     /// For each welded vertex, whether it carries feathers (its spacing
     /// multiplier is positive); empty when every vertex does.
     pub feathered: Vec<bool>,
+    /// Each feather's painted layer (the layer map at its root); empty when
+    /// no layer map was given. See [`crate::ordering::Priorities::with_layers`].
+    pub layers: Vec<f32>,
     /// Where each feather is planted.
     pub roots: Vec<RootBinding>,
     /// Each feather's dimensions.
@@ -69,6 +72,7 @@ impl Dressing {
             triangles: mesh.triangles.clone(),
             source_triangle: mesh.source_triangle.clone(),
             feathered: Vec::new(),
+            layers: Vec::new(),
             reach: shapes.iter().map(|s| s.length).collect(),
             shapes,
             roots,
@@ -193,6 +197,6 @@ impl Coat {
     }
 }
 
-crate::memory::heap_size_of_fields!(Dressing { surface, triangles, source_triangle, feathered, roots, shapes, reach, face_part } plain {
+crate::memory::heap_size_of_fields!(Dressing { surface, triangles, source_triangle, feathered, layers, roots, shapes, reach, face_part } plain {
     neighbour_params, adjust_params, config, parts
 });

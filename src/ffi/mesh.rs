@@ -29,14 +29,52 @@ pub struct PlumageMeshDesc {
     pub length_scale: *const f32,
     /// Optional feather width multiplier per vertex; may be NULL.
     pub width_scale: *const f32,
+    /// Optional skeleton the vertices are skinned to; may be NULL. Without
+    /// `orientations` or a `flow_source`, feathers then run from the head
+    /// down the trunk and out along every limb (see `PlumageSkeleton`).
+    pub skeleton: *const PlumageSkeleton,
+    /// Optional layer per vertex (any finite value); may be NULL. Where two
+    /// neighbouring feathers' layers differ, the one on the higher layer
+    /// lies on top, whatever the growth priority says; equal layers keep it.
+    pub layer: *const f32,
 }
 
-pub(crate) const MESH_DESC_V1_SIZE: usize = std::mem::size_of::<PlumageMeshDesc>();
+/// A skeleton and the skin weights binding the mesh's vertices to it, for
+/// the orientation field. Joint positions are at the rest pose, in the
+/// same space as the mesh's positions (for glTF: the joint nodes' world
+/// positions in the pose the rest positions were taken in). Joints no
+/// vertex is weighted to and with no weighted ancestor are ignored; each
+/// remaining tree of joints is walked from its head, so that every bone
+/// points away from it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlumageSkeleton {
+    /// Number of joints (1 to 65536).
+    pub joint_count: u32,
+    /// Joints each vertex is weighted to (1 to 16; glTF's JOINTS_0 gives 4).
+    pub influences: u32,
+    /// xyz per joint, `3 * joint_count` floats.
+    pub joint_positions: *const f32,
+    /// Per joint, its parent's index, or -1 for a root.
+    pub joint_parents: *const i32,
+    /// `influences` joint indices per vertex (`influences * vertex_count`).
+    pub vertex_joints: *const u32,
+    /// `influences` weights per vertex, finite and >= 0.
+    pub vertex_weights: *const f32,
+    /// The joint the flow starts from (the tip of the head or the beak), or
+    /// -1: the end joint (one bone attached) farthest against
+    /// `PlumageConfig.flow_axis` when that is set, else farthest up and
+    /// forward (+Y plus +Z, glTF's conventions).
+    pub head_joint: i32,
+}
+
+/// The size of the first published `PlumageMeshDesc` (up to `width_scale`).
+pub(crate) const MESH_DESC_V1_SIZE: usize = std::mem::offset_of!(PlumageMeshDesc, skeleton);
 
 impl PlumageMeshDesc {
     pub(crate) fn empty() -> Self {
         Self {
-            struct_size: MESH_DESC_V1_SIZE as u32,
+            struct_size: std::mem::size_of::<Self>() as u32,
             positions: std::ptr::null(),
             vertex_count: 0,
             indices: std::ptr::null(),
@@ -45,6 +83,8 @@ impl PlumageMeshDesc {
             spacing_scale: std::ptr::null(),
             length_scale: std::ptr::null(),
             width_scale: std::ptr::null(),
+            skeleton: std::ptr::null(),
+            layer: std::ptr::null(),
         }
     }
 }
@@ -83,7 +123,57 @@ pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshI
             spacing_scale: optional_slice(d.spacing_scale, d.vertex_count),
             length_scale: optional_slice(d.length_scale, d.vertex_count),
             width_scale: optional_slice(d.width_scale, d.vertex_count),
+            skeleton: read_skeleton(d.skeleton, d.vertex_count)?,
+            layer: optional_slice(d.layer, d.vertex_count),
         })
+    }
+}
+
+/// Borrowed view of a skeleton's arrays (`None` for NULL).
+///
+/// # Safety
+/// As for [`read_mesh`]: every pointer of a non-NULL `skeleton` points to as
+/// many elements as its counts say.
+unsafe fn read_skeleton<'a>(
+    skeleton: *const PlumageSkeleton,
+    vertex_count: usize,
+) -> Result<Option<crate::SkeletonInput<'a>>, Failure> {
+    if skeleton.is_null() {
+        return Ok(None);
+    }
+    // SAFETY: non-NULL, forwarded contract.
+    let s = unsafe { *skeleton };
+    for (ptr, name) in [
+        (s.joint_positions.cast::<u8>(), "skeleton joint_positions"),
+        (s.joint_parents.cast(), "skeleton joint_parents"),
+        (s.vertex_joints.cast(), "skeleton vertex_joints"),
+        (s.vertex_weights.cast(), "skeleton vertex_weights"),
+    ] {
+        if ptr.is_null() {
+            return Err(Failure::null(name));
+        }
+    }
+    let joints = s.joint_count as usize;
+    if joints == 0 || joints > crate::skeleton::MAX_JOINTS {
+        let text = format!("skeleton joint_count {joints}: it must be 1 to {}", crate::skeleton::MAX_JOINTS);
+        return Err(Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, text));
+    }
+    let influences = s.influences as usize;
+    if influences == 0 || influences > crate::skeleton::MAX_INFLUENCES {
+        let text = format!("skeleton influences {influences}: it must be 1 to {}", crate::skeleton::MAX_INFLUENCES);
+        return Err(Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, text));
+    }
+    let per_vertex = checked_len(vertex_count, influences, "vertex_count × skeleton influences")?;
+    // SAFETY: non-NULL, lengths per the contract; sizes bounded above.
+    unsafe {
+        Ok(Some(crate::SkeletonInput {
+            joint_positions: std::slice::from_raw_parts(s.joint_positions, 3 * joints),
+            joint_parents: std::slice::from_raw_parts(s.joint_parents, joints),
+            influences,
+            vertex_joints: std::slice::from_raw_parts(s.vertex_joints, per_vertex),
+            vertex_weights: std::slice::from_raw_parts(s.vertex_weights, per_vertex),
+            head_joint: s.head_joint,
+        }))
     }
 }
 

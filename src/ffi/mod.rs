@@ -58,7 +58,7 @@ pub use errors::*;
 pub use feathers::*;
 pub use instancing::*;
 pub use lifecycle::*;
-pub use mesh::PlumageMeshDesc;
+pub use mesh::{PlumageMeshDesc, PlumageSkeleton};
 pub use state::*;
 pub use stats::*;
 pub use status::*;

@@ -27,6 +27,11 @@ pub struct PlumageSamplingStats {
     pub alignment: f32,
     /// Wall time of sampling.
     pub seconds: f64,
+    /// Faces of the feathered skin round which the rest orientation field
+    /// turns (appended): its sources, sinks, whorls and saddles.
+    pub field_singularities: u32,
+    /// Always 0 (keeps the struct free of padding bytes).
+    pub reserved: u32,
 }
 
 /// Static ordering figures (`plumage_system_ordering_stats`). Fill
@@ -125,6 +130,10 @@ pub struct PlumageFrameStats {
     pub drape_descents: u64,
 }
 
+/// The layout of `PlumageSamplingStats` before `field_singularities` was
+/// appended: such structs are filled up to their size.
+pub(crate) const SAMPLING_STATS_V1_SIZE: usize = std::mem::offset_of!(PlumageSamplingStats, field_singularities);
+
 /// The layout of `PlumageFrameStats` before `neighbourhood_seconds` was
 /// appended: such structs are filled up to their size.
 pub(crate) const FRAME_STATS_V1_SIZE: usize = std::mem::offset_of!(PlumageFrameStats, neighbourhood_seconds);
@@ -133,7 +142,7 @@ pub(crate) const FRAME_STATS_V1_SIZE: usize = std::mem::offset_of!(PlumageFrameS
 // are fully defined (and comparable with memcmp).
 const _: () = {
     use std::mem::size_of;
-    assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8);
+    assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8 + 4 * 2);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
     assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 21);
 };
@@ -153,7 +162,7 @@ pub unsafe extern "C" fn plumage_system_sampling_stats(
 ) -> PlumageStatus {
     // SAFETY: forwarded contract of this function.
     unsafe {
-        figures_out(sys, out, std::mem::size_of::<PlumageSamplingStats>(), "PlumageSamplingStats", |system| {
+        figures_out(sys, out, SAMPLING_STATS_V1_SIZE, "PlumageSamplingStats", |system| {
             let r = system.sampling_report().ok_or_else(|| Failure::not_available("sampling figures"))?;
             Ok(PlumageSamplingStats {
                 struct_size: 0,
@@ -163,6 +172,8 @@ pub unsafe extern "C" fn plumage_system_sampling_stats(
                 coverage_gap: r.coverage_gap,
                 alignment: r.alignment,
                 seconds: r.seconds,
+                field_singularities: r.field_singularities as u32,
+                reserved: 0,
             })
         })
     }

@@ -52,6 +52,11 @@ pub struct PlumageValidation {
     /// Median number of feathers beneath a placed feather's tip (those
     /// counted in `stack_efficiency`).
     pub stack_depth_median: f64,
+    /// Percentage of the feathers whose heading (the shaft's direction in
+    /// the skin's tangent plane) turns more than 45 degrees from the mean
+    /// heading of their 8 nearest neighbours (appended): whorls, partings
+    /// and crowns where the orientation field turns sharply.
+    pub discord_percent: f64,
 }
 
 impl From<&ValidationReport> for PlumageValidation {
@@ -70,6 +75,7 @@ impl From<&ValidationReport> for PlumageValidation {
             bristle_percent: r.bristle_percent,
             stack_efficiency: r.stack_efficiency,
             stack_depth_median: r.stack_depth_median,
+            discord_percent: r.discord_percent,
         }
     }
 }
@@ -109,7 +115,7 @@ pub(crate) const VALIDATION_V1_SIZE: usize = std::mem::offset_of!(PlumageValidat
 // are fully defined (and comparable with memcmp).
 const _: () = {
     use std::mem::size_of;
-    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 11);
+    assert!(size_of::<PlumageValidation>() == 4 + 4 + 8 * 12);
     assert!(size_of::<PlumagePartStats>() == 4 + 4 + 8 * 5);
 };
 

@@ -36,10 +36,12 @@ pub(super) fn static_order(coat: &mut Coat, dressing: &Dressing, work: &mut Work
             work.orientations.clear();
             work.orientations.extend(coat.frames.iter().zip(&coat.poses).map(|(f, p)| shaft_direction(f, *p)));
             Priorities::legacy(&coat.frames, &work.orientations, dressing.config.gamma)
+                .with_layers(&dressing.layers)
                 .deltas_of_pairs(pairs, &mut work.deltas)
         }
         Mode::Incremental | Mode::Rebuild => {
             Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda)
+                .with_layers(&dressing.layers)
                 .deltas_of_pairs(pairs, &mut work.deltas)
         }
     }

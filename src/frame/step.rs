@@ -179,7 +179,8 @@ pub fn step_coat(
     // 3. Reordering (incremental only: the legacy order is fixed).
     let mut report = FrameReport { frame_index: coat.frame_index + 1, neighbourhood_seconds, ..FrameReport::default() };
     if incremental {
-        let priorities = Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda);
+        let priorities = Priorities::improved(&coat.frames, dressing.config.gamma, dressing.config.lambda)
+            .with_layers(&dressing.layers);
         let pairs = dressing.config.recompute_neighbourhoods.then(|| coat.neighbourhoods.pairs());
         let stats = coat.order.update_frame(pairs, &step.r_k, &priorities);
         progress.check(Phase::Ordering, 0.8)?;

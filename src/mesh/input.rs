@@ -1,6 +1,7 @@
 //! The mesh as the caller hands it in, and the checks it must pass.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::skeleton::SkeletonInput;
 
 /// A borrowed mesh in the caller's own vertex numbering.
 #[derive(Clone, Copy, Debug)]
@@ -17,12 +18,27 @@ pub struct MeshInput<'a> {
     pub length_scale: Option<&'a [f32]>,
     /// Optional feather width multiplier per vertex.
     pub width_scale: Option<&'a [f32]>,
+    /// Optional skeleton the vertices are skinned to: without orientation
+    /// hints or a flow source, the orientation field follows its bones.
+    pub skeleton: Option<SkeletonInput<'a>>,
+    /// Optional layer per vertex (finite): where two neighbouring feathers'
+    /// layers differ, the one on the higher layer lies on top.
+    pub layer: Option<&'a [f32]>,
 }
 
 impl<'a> MeshInput<'a> {
     /// A mesh with positions and indices only.
     pub fn new(positions: &'a [f32], indices: &'a [u32]) -> Self {
-        Self { positions, indices, orientations: None, spacing_scale: None, length_scale: None, width_scale: None }
+        Self {
+            positions,
+            indices,
+            orientations: None,
+            spacing_scale: None,
+            length_scale: None,
+            width_scale: None,
+            skeleton: None,
+            layer: None,
+        }
     }
 
     /// Number of vertices (positions / 3).
@@ -79,6 +95,13 @@ impl<'a> MeshInput<'a> {
                     return Err(Error::new(kind, format!("{name} of vertex {v} is {x}; it must be finite and >= 0")));
                 }
             }
+        }
+        if let Some(layer) = self.layer {
+            check_len("layer", layer.len(), n)?;
+            check_finite("layer", layer, 1)?;
+        }
+        if let Some(skeleton) = &self.skeleton {
+            skeleton.check(n)?;
         }
         Ok(())
     }

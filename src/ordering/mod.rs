@@ -32,6 +32,7 @@
 
 mod dynamic_order;
 mod kd_tree;
+pub(crate) use kd_tree::KdTree;
 mod neighbours;
 mod order_graph;
 mod order_state;

@@ -12,6 +12,12 @@
 //! * Eq. 2 (the 2015 paper, legacy mode): `P_AB = o_A·(r_B − r_A) + γ n_A·(r_A − r_B)`
 //!   with the feather's actual orientation `o_A`.
 //!
+//! Painted layers ([`Priorities::with_layers`]) come first: where two
+//! roots' layers differ, the root on the higher layer lies on top whatever
+//! Eq. 3 says, with a priority difference of [`LAYER_PRIORITY`], stronger
+//! than any geometric one (so a cycle is always broken on a geometric
+//! edge); equal layers leave Eq. 3 (or Eq. 2) alone.
+//!
 //! Exact antisymmetry: `ΔP_AB` is always evaluated as `P(lo, hi) − P(hi, lo)`
 //! for the ordered pair `lo < hi` and negated when asked the other way round,
 //! so `ΔP_AB == −ΔP_BA` holds bitwise (Rust never contracts `a*b + c` into a
@@ -19,6 +25,11 @@
 
 use crate::geometry::RootFrame;
 use glam::Vec3;
+
+/// The magnitude of a priority difference between two roots on different
+/// layers: beyond any geometric `ΔP` (coordinates are bounded by
+/// [`crate::limits::MAX_COORDINATE`]) and finite, as the order stores it.
+pub(crate) const LAYER_PRIORITY: f32 = 1e30;
 
 /// Which definition of the directed priority is used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -37,13 +48,15 @@ pub struct Priorities<'a> {
     rule: PriorityRule,
     gamma: f32,
     lambda: f32,
+    /// Per root, its painted layer; empty when none was painted.
+    layers: &'a [f32],
 }
 
 impl<'a> Priorities<'a> {
     /// Eq. 3 priorities over the root frames (γ = 0.6, λ = 0.3 by default in
     /// the config; `0 ≤ λ < γ < 1`).
     pub fn improved(frames: &'a [RootFrame], gamma: f32, lambda: f32) -> Self {
-        Self { frames, orientations: &[], rule: PriorityRule::Improved, gamma, lambda }
+        Self { frames, orientations: &[], rule: PriorityRule::Improved, gamma, lambda, layers: &[] }
     }
 
     /// Eq. 2 priorities with the feathers' actual orientations `o_i`
@@ -53,7 +66,17 @@ impl<'a> Priorities<'a> {
     /// If `orientations` and `frames` differ in length.
     pub fn legacy(frames: &'a [RootFrame], orientations: &'a [Vec3], gamma: f32) -> Self {
         assert_eq!(frames.len(), orientations.len(), "one orientation per root");
-        Self { frames, orientations, rule: PriorityRule::Legacy, gamma, lambda: 0.0 }
+        Self { frames, orientations, rule: PriorityRule::Legacy, gamma, lambda: 0.0, layers: &[] }
+    }
+
+    /// The same priorities with painted layers (one per root, or empty for
+    /// none): see the module doc.
+    ///
+    /// # Panics
+    /// If `layers` is neither empty nor one per root.
+    pub fn with_layers(self, layers: &'a [f32]) -> Self {
+        assert!(layers.is_empty() || layers.len() == self.frames.len(), "one layer per root");
+        Self { layers, ..self }
     }
 
     /// The rule in use.
@@ -85,6 +108,11 @@ impl<'a> Priorities<'a> {
     /// The priority difference `ΔP_AB = P_AB − P_BA` (paper Eq. 1); positive
     /// means B is prior to A. Exactly antisymmetric; 0 when `a == b`.
     pub fn delta(&self, a: u32, b: u32) -> f32 {
+        if let (Some(&la), Some(&lb)) = (self.layers.get(a as usize), self.layers.get(b as usize)) {
+            if la != lb {
+                return if la > lb { LAYER_PRIORITY } else { -LAYER_PRIORITY };
+            }
+        }
         match a.cmp(&b) {
             std::cmp::Ordering::Less => self.directed(a, b) - self.directed(b, a),
             std::cmp::Ordering::Greater => -(self.directed(b, a) - self.directed(a, b)),
@@ -127,6 +155,21 @@ mod tests {
         // ΔP_01 = 2 Δx > 0: root 1 (further along +x) is prior to root 0.
         assert!((p.delta(0, 1) - 2.0).abs() < 1e-6);
         assert_eq!(p.delta(1, 0).to_bits(), (-p.delta(0, 1)).to_bits());
+    }
+
+    #[test]
+    fn the_higher_layer_lies_on_top_and_equal_layers_keep_eq3() {
+        let frames = [flat(0.0, 0.0, 0.0), flat(1.0, 0.2, 0.0), flat(2.0, 0.0, 0.0)];
+        let plain = Priorities::improved(&frames, 0.6, 0.3);
+        let layers = [1.0, 0.0, 1.0];
+        let p = plain.with_layers(&layers);
+        // Eq. 3 puts 1 before 0 (0 on top); the layers agree on who is on top.
+        assert_eq!(p.delta(0, 1), LAYER_PRIORITY);
+        assert_eq!(p.delta(1, 0), -LAYER_PRIORITY);
+        // Root 1 lies ahead of 2 by Eq. 3 in reverse: the layer wins.
+        assert!(plain.delta(1, 2) > 0.0 && p.delta(1, 2) < 0.0);
+        // Equal layers: Eq. 3 bit for bit.
+        assert_eq!(p.delta(0, 2).to_bits(), plain.delta(0, 2).to_bits());
     }
 
     #[test]

@@ -7,7 +7,7 @@ use crate::coat::{Coat, Dressing};
 use crate::config::Config;
 use crate::error::Result;
 use crate::feather::{FeatherMesh, FeatherPose, FeatherTemplate, InstanceRecord};
-use crate::field::Fields;
+use crate::field::{Fields, VertexMaps};
 use crate::frame::{StepWorkspace, Workspace};
 use crate::geometry::RootFrame;
 use crate::memory::MemoryUse;
@@ -91,15 +91,25 @@ impl System {
         let surface = Surface::new(&welded);
         progress.check(Phase::Preparing, 0.6)?;
         let attribute = |a: Option<&[f32]>, stride| a.map(|v| welded.weld_attribute(v, stride));
-        let fields = Fields::new(
-            &welded,
-            &surface,
-            attribute(mesh.orientations, 3).as_deref(),
-            attribute(mesh.spacing_scale, 1).as_deref(),
-            attribute(mesh.length_scale, 1).as_deref(),
-            attribute(mesh.width_scale, 1).as_deref(),
-            config,
-        )?;
+        let skeleton_flow = mesh.skeleton.map(|skeleton| {
+            let hints = skeleton.flow_hints(mesh.positions, crate::skeleton::front(config.flow_axis));
+            welded.weld_attribute(&hints.iter().flat_map(|h| h.to_array()).collect::<Vec<f32>>(), 3)
+        });
+        let welded_maps = [
+            attribute(mesh.orientations, 3),
+            attribute(mesh.spacing_scale, 1),
+            attribute(mesh.length_scale, 1),
+            attribute(mesh.width_scale, 1),
+        ];
+        let [orientations, spacing_scale, length_scale, width_scale] = welded_maps.each_ref().map(|m| m.as_deref());
+        let maps = VertexMaps {
+            orientations,
+            skeleton_flow: skeleton_flow.as_deref(),
+            spacing_scale,
+            length_scale,
+            width_scale,
+        };
+        let fields = Fields::new(&welded, &surface, &maps, config)?;
         if config.spacing <= 0.0 {
             check_feather_arrays(config, crate::sampling::target_feathers(config))?;
         }
@@ -111,6 +121,14 @@ impl System {
         if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
             dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
         }
+        if let Some(layer) = attribute(mesh.layer, 1) {
+            let layers: Vec<f32> =
+                dressing.roots.iter().map(|r| crate::field::blend_at(&layer, &dressing.surface, r.point)).collect();
+            // One layer everywhere orders nothing: kept as no layers at all.
+            if layers.iter().any(|&l| l != layers[0]) {
+                dressing.layers = layers;
+            }
+        }
         // The metrics are measured below, beside the static adjustment.
         let sampling_report = SamplingReport {
             roots: dressing.len(),
@@ -119,6 +137,7 @@ impl System {
             coverage_gap: f32::NAN,
             alignment: f32::NAN,
             seconds: planted.seconds,
+            field_singularities: singular_faces_on_feathers(&welded, &fields),
         };
         let mut system = Self {
             pool,
@@ -503,4 +522,12 @@ pub fn feather_arrays_floor(feathers: usize) -> usize {
         + size_of::<ObstacleBoxes>()
         + size_of::<crate::stats::FeatherRecord>();
     feathers.saturating_mul(per_feather)
+}
+
+/// The faces with a feathered corner round which the rest orientation
+/// field turns (see [`crate::validation::field_singularities`]).
+fn singular_faces_on_feathers(mesh: &WeldedMesh, fields: &Fields) -> usize {
+    let spacing = fields.vertex_spacing_scales();
+    let singular = crate::validation::field_singularities(&mesh.positions, &mesh.triangles, fields.vertex_directions());
+    singular.iter().filter(|&&(t, _)| mesh.triangles[t as usize].iter().any(|&v| spacing[v as usize] > 0.0)).count()
 }

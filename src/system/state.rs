@@ -214,6 +214,11 @@ impl System {
             words.extend([shape.length, shape.width, shape.thickness, shape.vane_split].map(bits));
             words.push(u64::from(shape.segments));
         }
+        // Painted layers change the order; without any, the words are as before.
+        if !dressing.layers.is_empty() {
+            words.push(dressing.layers.len() as u64);
+            words.extend(dressing.layers.iter().map(|&l| bits(l)));
+        }
         hash64(&words)
     }
 }

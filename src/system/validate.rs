@@ -126,5 +126,6 @@ fn validation_report(v: &Validation) -> ValidationReport {
         bristle_percent: v.tip_heights.bristle_percent,
         stack_efficiency: v.tip_stacks.efficiency,
         stack_depth_median: v.tip_stacks.depth_median,
+        discord_percent: v.groom.discord_percent,
     }
 }

@@ -5,11 +5,13 @@
 
 mod coverage;
 mod exact;
+mod groom;
 mod lie;
 
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
 pub(crate) use exact::{BodyScratch, BoxedTriangles, FeatherBoxes, ROOT_ALLOWANCE};
 pub use exact::{body_penetrations, feather_beyond_root};
+pub use groom::{Groom, field_singularities, groom};
 // Only the adjustment's tests use the plane directly.
 #[cfg(test)]
 pub(crate) use exact::FlatPlane;
@@ -51,6 +53,8 @@ pub struct Validation {
     /// How the tips lie on the feathers stacked beneath them (see
     /// [`tip_lies`]).
     pub tip_stacks: TipStacks,
+    /// Whether the feathers run the way their neighbours run (see [`groom`]).
+    pub groom: Groom,
 }
 
 /// What a validation looks at: every feather at one pose, the body at that
@@ -109,6 +113,7 @@ pub fn validate_with_progress(input: &ValidationInput<'_>, progress: &Progress) 
         mean_pitch_deg: mean_pitch_deg(poses),
         tip_heights,
         tip_stacks,
+        groom: groom(frames, |_| true),
     })
 }
 
@@ -143,6 +148,7 @@ pub fn validate_part(input: &ValidationInput<'_>, member: &[bool]) -> Validation
         mean_pitch_deg: mean_pitch_deg(&p),
         tip_heights,
         tip_stacks,
+        groom: groom(frames, is_member),
     }
 }
 
