@@ -548,6 +548,29 @@ typedef struct PlumageConfig {
 typedef uint32_t PlumageStatus;
 
 /**
+ * One kind of feather of a type map: the proportions of its shape to the
+ * local spacing (`PlumageConfig.length_per_spacing` and
+ * `width_per_spacing` are the configuration's own). 0 takes the
+ * configuration's value; every type shares the configuration's shaft
+ * segments and bend limit, and its feather_length, feather_width and
+ * feather_thickness overrides when they are set.
+ */
+typedef struct PlumageFeatherType {
+  /**
+   * Shaft length over the local spacing (0 to 100).
+   */
+  float length_per_spacing;
+  /**
+   * Vane width over the local spacing (0 to 100).
+   */
+  float width_per_spacing;
+  /**
+   * Multiplier of the thickness the width gives (0 to 100; 0 means 1).
+   */
+  float thickness_scale;
+} PlumageFeatherType;
+
+/**
  * A skeleton and the skin weights binding the mesh's vertices to it, for
  * the orientation field. Joint positions are at the rest pose, in the
  * same space as the mesh's positions (for glTF: the joint nodes' world
@@ -644,6 +667,21 @@ typedef struct PlumageMeshDesc {
    * lies on top, whatever the growth priority says; equal layers keep it.
    */
   const float *layer;
+  /**
+   * Optional feather type per vertex, an index into `feather_types`; may
+   * be NULL. Each feather takes the type of the corner of its triangle
+   * nearest its root.
+   */
+  const uint32_t *feather_type;
+  /**
+   * The types `feather_type` indexes (`feather_type_count` of them, 1 to
+   * 256; fill each with `plumage_feather_type_init`).
+   */
+  const struct PlumageFeatherType *feather_types;
+  /**
+   * Number of `feather_types`.
+   */
+  uint32_t feather_type_count;
 } PlumageMeshDesc;
 
 /**
@@ -1348,6 +1386,17 @@ void plumage_config_init(struct PlumageConfig *cfg);
  * `cfg` is NULL or points to writable memory for one `PlumageConfig`.
  */
 PlumageStatus plumage_config_init_preset(struct PlumageConfig *cfg, uint32_t preset);
+
+/**
+ * Fills `out` with the proportions of a preset (`PLUMAGE_PRESET_*`), for
+ * a type of `PlumageMeshDesc.feather_types`: `PLUMAGE_PRESET_SCALES` gives
+ * short, wide scales; the others the default feather. An unknown preset
+ * is refused with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `out` as it was.
+ *
+ * # Safety
+ * `out` is NULL or points to writable memory for one `PlumageFeatherType`.
+ */
+PlumageStatus plumage_feather_type_init(struct PlumageFeatherType *out, uint32_t preset);
 
 /**
  * Sets every pointer of `mesh` to NULL, every count to 0 and sets

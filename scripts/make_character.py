@@ -4,6 +4,8 @@ facing +Z) made of capsules (torso, head, upper and lower arms and legs),
 skinned to 16 joints (each capsule rigid to its bone, blended into the
 neighbouring joint near its ends), with a one-second walk cycle (arms and
 legs swinging, knees bending). The same figure as tests/common/character.rs.
+Vertex attribute _FEATHER_TYPE is 1 on the legs and 0 elsewhere (for
+--type-map), _LAYER is 1 on the arms and 0 elsewhere (for --layer-map).
 
 usage: make_character.py OUT.glb   (needs numpy and pygltflib)
 """
@@ -56,12 +58,14 @@ def capsule(a, b, r, rings, cap, sides):
 
 
 def character():
-    pos, tris, joints, weights = [], [], [], []
+    pos, tris, joints, weights, kind, layer = [], [], [], [], [], []
 
     def add(p, along, t, own, prev, nxt):
         base = sum(len(x) for x in pos)
         pos.append(p)
         tris.append(t + base)
+        kind.extend([1.0 if own >= 10 else 0.0] * len(p))
+        layer.extend([1.0 if 4 <= own < 10 else 0.0] * len(p))
         for s in along:
             other, w = own, 0.0
             if prev is not None and s < 0.15:
@@ -77,7 +81,7 @@ def character():
     for a, b, r in LIMBS:
         has_child = any(p == b for _, p in JOINTS)
         add(*capsule(j(a), j(b), r, 8, 3, 12), a, JOINTS[a][1], b if has_child else None)
-    return np.concatenate(pos), np.concatenate(tris), np.array(joints), np.array(weights)
+    return np.concatenate(pos), np.concatenate(tris), np.array(joints), np.array(weights), np.array(kind), np.array(layer)
 
 
 def quat(axis, angle):
@@ -86,7 +90,7 @@ def quat(axis, angle):
 
 
 def main(out):
-    positions, triangles, joints, weights = character()
+    positions, triangles, joints, weights, kind, layer = character()
     times = np.linspace(0.0, 1.0, 25)
     swing = 0.6 * np.sin(2 * math.pi * times)
     rotations = {  # joint -> (axis, angle per key)
@@ -126,6 +130,8 @@ def main(out):
         POSITION=accessor(positions.astype(np.float32), g.FLOAT, g.VEC3, g.ARRAY_BUFFER, True),
         JOINTS_0=accessor(joints.astype(np.uint16), g.UNSIGNED_SHORT, g.VEC4, g.ARRAY_BUFFER),
         WEIGHTS_0=accessor(weights.astype(np.float32), g.FLOAT, g.VEC4, g.ARRAY_BUFFER))
+    attrs._FEATHER_TYPE = accessor(kind.astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
+    attrs._LAYER = accessor(layer.astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
     indices = accessor(triangles.astype(np.uint32).reshape(-1), g.UNSIGNED_INT, g.SCALAR, g.ELEMENT_ARRAY_BUFFER)
     gltf.meshes = [g.Mesh(name="body", primitives=[g.Primitive(attributes=attrs, indices=indices)])]
     inverse_bind = np.array([np.eye(4) for _ in JOINTS], np.float32)

@@ -269,6 +269,15 @@ impl Config {
     }
 }
 
+impl crate::feather::FeatherType {
+    /// The proportions of `preset` (its length and width per spacing), for
+    /// a type of a type map.
+    pub fn of_preset(preset: Preset) -> Self {
+        let c = Config::preset(preset);
+        Self { length_per_spacing: c.length_per_spacing, width_per_spacing: c.width_per_spacing, thickness_scale: 1.0 }
+    }
+}
+
 impl Config {
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<()> {

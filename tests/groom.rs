@@ -240,3 +240,55 @@ fn bad_layers_and_skeletons_are_refused() {
     let e = System::new(&config, &mesh).expect_err("joint index out of range");
     assert_eq!(e.kind(), plumage::ErrorKind::IndexOutOfRange, "{e}");
 }
+
+#[test]
+fn scales_on_the_legs_and_feathers_elsewhere_lie_together_without_crossing() {
+    use plumage::config::Preset;
+    use plumage::feather::{FeatherType, FeatherTypeMap};
+    let c = character::character();
+    let (joints, parents) = (character::joint_positions(), character::joint_parents());
+    // Type 1 (scales) on the legs (limbs 4 to 7), type 0 (feathers) elsewhere.
+    let per_vertex: Vec<u32> = c.limb.iter().map(|l| u32::from(l.is_some_and(|k| k >= 4))).collect();
+    let types = [FeatherType::of_preset(Preset::Feathers), FeatherType::of_preset(Preset::Scales)];
+    let skeleton = SkeletonInput {
+        joint_positions: &joints,
+        joint_parents: &parents,
+        influences: INFLUENCES,
+        vertex_joints: &c.vertex_joints,
+        vertex_weights: &c.vertex_weights,
+        head_joint: -1,
+    };
+    let mesh = MeshInput {
+        skeleton: Some(skeleton),
+        feather_types: Some(FeatherTypeMap { per_vertex: &per_vertex, types: &types }),
+        ..MeshInput::new(&c.shape.positions, &c.shape.indices)
+    };
+    let mut bytes = Vec::new();
+    for threads in [1, 2, 4] {
+        let config = Config { target_feathers: 1500, seed: 2, threads, ..Config::default() };
+        let mut system = System::new(&config, &mesh).expect("typed character");
+        // Width over length as planted: the scales' 2/2 on the legs, the
+        // feathers' 1.75/4 elsewhere (medians: a feather may be shortened).
+        let (mut legs, mut body) = (Vec::new(), Vec::new());
+        for f in system.feathers().iter().filter(|f| f.length > 0.0) {
+            let v = c.shape.indices[3 * f.triangle as usize] as usize;
+            let on_legs = per_vertex[v] == 1;
+            (if on_legs { &mut legs } else { &mut body }).push(f.width / f.length);
+        }
+        let median = |v: &mut Vec<f32>| {
+            v.sort_by(f32::total_cmp);
+            v[v.len() / 2]
+        };
+        let (legs, body) = (median(&mut legs), median(&mut body));
+        assert!((legs - 1.0).abs() < 0.1 && (body - 1.75 / 4.0).abs() < 0.05, "width/length: legs {legs}, body {body}");
+        for k in 0..=3 {
+            if k > 0 {
+                system.step(&character::posed(&c, 0.15 * k as f32)).expect("step");
+            }
+            let v = system.validate().expect("validation");
+            assert_eq!((v.intersecting_pairs, v.body_penetrations), (0, 0), "{threads} threads, frame {k}");
+        }
+        bytes.push(system.save_state());
+    }
+    assert!(bytes.windows(2).all(|w| w[0] == w[1]), "the same bytes at 1, 2 and 4 threads");
+}

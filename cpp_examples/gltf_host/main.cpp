@@ -32,7 +32,10 @@ VertexMaps read_maps(const GltfScene& scene, const tinygltf::Model& model, const
     };
     const VertexMapSpec& flow = opt.flow_map;
     std::vector<float> directions = flow.attribute.empty() ? std::vector<float>{} : scene.rest_directions(model, flow.attribute, flow.first);
-    return VertexMaps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions), read(opt.layer_map), std::nullopt};
+    VertexMaps maps{read(opt.spacing_map), read(opt.length_map), read(opt.width_map), std::move(directions), read(opt.layer_map), std::nullopt, {}, {}};
+    // Types are whole numbers in the attribute (rounded; negative ones are 0).
+    for (float t : read(opt.type_map)) maps.feather_type.push_back(static_cast<uint32_t>(std::lround(std::max(t, 0.0f))));
+    return maps;
 }
 
 // The input mesh's material, with the UVs its base colour texture needs.
@@ -69,8 +72,12 @@ Subject open_subject(const Options& opt, VertexMaps& maps) {
             for (auto [to, from] : {std::pair{&all.spacing, &part.spacing}, {&all.length, &part.length}, {&all.width, &part.width}, {&all.flow, &part.flow}, {&all.layer, &part.layer}}) {
                 to->insert(to->end(), from->begin(), from->end());
             }
+            all.feather_type.insert(all.feather_type.end(), part.feather_type.begin(), part.feather_type.end());
             s.materials.push_back(mesh_material(model, *scene));
             scenes.push_back(std::move(scene));
+        }
+        if (!opt.type_map.attribute.empty()) {
+            all.feather_types = opt.feather_types.empty() ? std::vector<uint32_t>{PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SCALES} : opt.feather_types;
         }
         maps = std::move(all);
         if (scenes.size() == 1) {
@@ -149,7 +156,7 @@ nlohmann::ordered_json run_config(const PlumageConfig& cfg, const Options& opt, 
     j["frames"] = frames;
     j["animation"] = clip ? nlohmann::ordered_json{{"name", clip->name}, {"index", clip->index}, {"start", clip->start}, {"duration", clip->duration}}
                           : nlohmann::ordered_json(nullptr);
-    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}, {"flow_map", &opt.flow_map}, {"layer_map", &opt.layer_map}};
+    const std::pair<const char*, const VertexMapSpec*> maps[] = {{"spacing_map", &opt.spacing_map}, {"length_map", &opt.length_map}, {"width_map", &opt.width_map}, {"flow_map", &opt.flow_map}, {"layer_map", &opt.layer_map}, {"type_map", &opt.type_map}};
     for (const auto& [key, m] : maps) {
         if (!m->attribute.empty()) j[key] = m->attribute + ":" + std::to_string(m->first);
     }

@@ -101,7 +101,7 @@ bool takes_value(const std::string& option) {
     static const char* const kOptions[] = {"--mesh", "--animation", "--fps",  "--start", "--frames",  "--feathers", "--spacing", "--sampler",
                                            "--theta", "--seed",     "--flow", "--flow-source", "--mode",    "--threads",  "--memory-limit",  "--validate", "--out", "--report", "--poses", "--instances",
                                            "--model-resolution", "--drift-tolerance", "--settle-rate", "--curvature-min-scale", "--fluffiness", "--shaft-segments", "--bend-limit", "--preset",
-                                           "--spacing-map", "--length-map", "--width-map", "--flow-map", "--layer-map", "--skeleton-flow"};
+                                           "--spacing-map", "--length-map", "--width-map", "--flow-map", "--layer-map", "--skeleton-flow", "--type-map", "--feather-types"};
     for (const char* o : kOptions) {
         if (option == o) return true;
     }
@@ -169,6 +169,8 @@ std::string usage_text() {
            "  --length-map NAME[:C]  --width-map NAME[:C]   per-vertex feather length and width multipliers\n"
            "  --flow-map NAME[:C]  per-vertex flow direction from components C..C+2 of vertex attribute NAME\n"
            "  --layer-map NAME[:C]  per-vertex layer: where neighbours' layers differ, the higher lies on top\n"
+           "  --type-map NAME[:C]  per-vertex feather type (rounded), an index into --feather-types\n"
+           "  --feather-types P,P,...   the types' proportions from presets feathers|scales|kite (default feathers,scales)\n"
            "                       (e.g. a custom _FLOW), in the mesh's own space; overrides --flow and --flow-source\n"
            "  --validate every|last|none   exact validation per frame (default last; not in step time)\n"
            "  --out FILE.glb       write the body and its animated feathers\n"
@@ -248,6 +250,18 @@ Options parse_options(int argc, const char* const* argv) {
         else if (arg == "--width-map") o.width_map = parse_map(arg, value);
         else if (arg == "--flow-map") o.flow_map = parse_map(arg, value);
         else if (arg == "--layer-map") o.layer_map = parse_map(arg, value);
+        else if (arg == "--type-map") o.type_map = parse_map(arg, value);
+        else if (arg == "--feather-types") {
+            o.feather_types.clear();
+            std::string rest = value;
+            while (true) {
+                const size_t comma = rest.find(',');
+                o.feather_types.push_back(parse_choice(arg, rest.substr(0, comma), {"feathers", "sleek", "kite", "scales"},
+                                                       {PLUMAGE_PRESET_FEATHERS, PLUMAGE_PRESET_SLEEK, PLUMAGE_PRESET_KITE, PLUMAGE_PRESET_SCALES}));
+                if (comma == std::string::npos) break;
+                rest = rest.substr(comma + 1);
+            }
+        }
         else if (arg == "--skeleton-flow") o.skeleton_flow = parse_choice(arg, value, {"on", "off"}, {1u, 0u}) != 0;
         else if (arg == "--model-resolution") o.model_resolution = parse_resolution(arg, value);
         else if (arg == "--out") o.out = value;
@@ -257,7 +271,7 @@ Options parse_options(int argc, const char* const* argv) {
         if (value.empty() && (arg == "--out" || arg == "--report" || arg == "--poses" || arg == "--instances" || arg == "--mesh" || arg == "--animation")) throw UsageError(arg + ": empty value");
     }
     if (o.feathers && o.spacing) throw UsageError("--feathers and --spacing are alternatives: give one");
-    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map, &o.layer_map}) {
+    for (const VertexMapSpec* m : {&o.spacing_map, &o.length_map, &o.width_map, &o.flow_map, &o.layer_map, &o.type_map}) {
         if (!m->attribute.empty() && o.input.empty()) throw UsageError(m->option + " reads a vertex attribute of a glTF input; the built-in model has none");
     }
     if (o.model_resolution && !o.input.empty()) throw UsageError("--model-resolution applies to the built-in model only, not to " + o.input);

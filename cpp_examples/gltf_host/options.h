@@ -52,6 +52,8 @@ struct Options {
     VertexMapSpec width_map;
     VertexMapSpec flow_map;
     VertexMapSpec layer_map;
+    VertexMapSpec type_map;  // --type-map: per-vertex index into feather_types
+    std::vector<uint32_t> feather_types;  // --feather-types: PLUMAGE_PRESET_* per type
     bool skeleton_flow = true;  // --skeleton-flow on|off
     ValidateWhen validate = ValidateWhen::Last;
     std::string out;

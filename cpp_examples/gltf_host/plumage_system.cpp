@@ -82,6 +82,13 @@ SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& p
         skeleton.head_joint = -1;
         mesh.skeleton = &skeleton;
     }
+    std::vector<PlumageFeatherType> types(maps.feather_types.size());
+    for (size_t k = 0; k < types.size(); ++k) check(plumage_feather_type_init(&types[k], maps.feather_types[k]), nullptr, "plumage_feather_type_init");
+    if (!maps.feather_type.empty()) {
+        mesh.feather_type = maps.feather_type.data();
+        mesh.feather_types = types.data();
+        mesh.feather_type_count = static_cast<uint32_t>(types.size());
+    }
     PlumageSystem* raw = nullptr;
     const uint32_t status = plumage_system_create(&cfg, &mesh, &raw);
     SystemHandle sys(raw);  // owned before anything can throw

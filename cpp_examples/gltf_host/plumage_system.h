@@ -49,6 +49,8 @@ struct VertexMaps {
     std::vector<float> flow;
     std::vector<float> layer;  // painted layers: the higher lies on top
     std::optional<SkinSkeleton> skeleton;  // the flow follows its bones
+    std::vector<uint32_t> feather_type;    // per vertex, an index into feather_types
+    std::vector<uint32_t> feather_types;   // PLUMAGE_PRESET_* of each type
 };
 
 SystemHandle create_system(const PlumageConfig& cfg, const std::vector<float>& positions, const std::vector<uint32_t>& indices,

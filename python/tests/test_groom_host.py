@@ -43,3 +43,15 @@ def test_the_characters_coat_follows_its_skeleton(host, character, tmp_path) -> 
     front = dress(host, character, tmp_path, "--seed", "1", "--skeleton-flow", "off")
     assert front["config"]["flow_from"] == "flow_source"
     assert front["summary"]["max_discord_percent"] > 2 * s["max_discord_percent"], (front["summary"], s)
+
+
+def test_painted_types_and_layers_dress_the_character_without_crossings(host, character, tmp_path) -> None:
+    r = dress(host, character, tmp_path, "--type-map", "_FEATHER_TYPE", "--feather-types", "feathers,scales",
+              "--layer-map", "_LAYER")
+    assert r["config"]["type_map"] == "_FEATHER_TYPE:0" and r["config"]["layer_map"] == "_LAYER:0"
+    s = r["summary"]
+    assert s["max_intersecting_pairs"] == 0 and s["max_body_penetrations"] == 0, s
+    assert s["max_discord_percent"] <= 1.0, s
+    bad = subprocess.run([host, str(character), "--frames", "0", "--type-map", "_FEATHER_TYPE", "--feather-types", "feathers,gills"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert bad.returncode == 2 and "--feather-types gills" in bad.stderr

@@ -7,7 +7,7 @@
 use crate::Config;
 use crate::adjustment::AdjustParams;
 use crate::body::BodyIndex;
-use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_direction};
+use crate::feather::{FeatherPose, FeatherShape, FeatherType, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::mesh::WeldedMesh;
 use crate::ordering::{NeighbourParams, Neighbourhoods, PriorityOrder};
@@ -89,19 +89,30 @@ impl Dressing {
     /// otherwise the spacing rules of [`FeatherShape::for_spacing`]; length
     /// and width then scale by the root's multipliers.
     pub fn shapes_for(roots: &[RootBinding], config: &Config) -> Vec<FeatherShape> {
-        roots
-            .iter()
-            .map(|r| {
-                let mut s = FeatherShape::proportioned(r.spacing, config.length_per_spacing, config.width_per_spacing)
-                    .overridden(config.feather_length, config.feather_width, config.feather_thickness);
-                s.length *= r.length_scale;
-                s.width *= r.width_scale;
-                if config.feather_thickness <= 0.0 {
-                    s.thickness *= r.width_scale;
-                }
-                s.with_segments(config.shaft_segments)
-            })
-            .collect()
+        let plain = FeatherType { length_per_spacing: 0.0, width_per_spacing: 0.0, thickness_scale: 1.0 };
+        roots.iter().map(|r| Self::shape_of(r, &plain, config)).collect()
+    }
+
+    /// Gives each feather the shape of its type (`kinds[i]` indexes
+    /// `types`), with its root's spacing and multipliers.
+    pub fn retype(&mut self, types: &[FeatherType], kinds: &[u8]) {
+        self.shapes =
+            self.roots.iter().zip(kinds).map(|(r, &k)| Self::shape_of(r, &types[k as usize], &self.config)).collect();
+        self.reach = self.shapes.iter().map(|s| s.length).collect();
+    }
+
+    fn shape_of(r: &RootBinding, kind: &FeatherType, config: &Config) -> FeatherShape {
+        let mut s = kind.shape(r.spacing, (config.length_per_spacing, config.width_per_spacing)).overridden(
+            config.feather_length,
+            config.feather_width,
+            config.feather_thickness,
+        );
+        s.length *= r.length_scale;
+        s.width *= r.width_scale;
+        if config.feather_thickness <= 0.0 {
+            s.thickness *= r.width_scale;
+        }
+        s.with_segments(config.shaft_segments)
     }
 
     /// Number of feathers.

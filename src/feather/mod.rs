@@ -9,11 +9,14 @@
 //! (0,0,0), tip (L,0,0), vane corners (s_w·L, ±W/2, 0). It is two
 //! triangles, one per vane, sharing the shaft.
 
+mod kind;
 mod mesh;
 mod pose;
 mod record;
 mod shape;
 
+pub(crate) use kind::MAX_FEATHER_TYPES;
+pub use kind::{FeatherType, FeatherTypeMap};
 pub use mesh::{FeatherMesh, FeatherMeshLayout};
 pub use pose::{
     FeatherPose, FeatherTriangles, MAX_TRIANGLES, feather_normal, feather_triangles, pose_change, segment_triangles,

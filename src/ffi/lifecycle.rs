@@ -37,7 +37,8 @@ pub unsafe extern "C" fn plumage_system_create(
         unsafe { *out = std::ptr::null_mut() };
         // SAFETY: forwarded pointer contracts of this function.
         let HostConfig { config, progress: host_progress, parallel_for } = unsafe { read_config(cfg) }?;
-        let mesh = unsafe { read_mesh(rest) }?;
+        let mut types = Vec::new();
+        let mesh = unsafe { read_mesh(rest, &mut types) }?;
         let progress = match &host_progress {
             Some(p) => crate::progress::Progress::to(p),
             None => crate::progress::Progress::none(),

@@ -37,6 +37,42 @@ pub struct PlumageMeshDesc {
     /// neighbouring feathers' layers differ, the one on the higher layer
     /// lies on top, whatever the growth priority says; equal layers keep it.
     pub layer: *const f32,
+    /// Optional feather type per vertex, an index into `feather_types`; may
+    /// be NULL. Each feather takes the type of the corner of its triangle
+    /// nearest its root.
+    pub feather_type: *const u32,
+    /// The types `feather_type` indexes (`feather_type_count` of them, 1 to
+    /// 256; fill each with `plumage_feather_type_init`).
+    pub feather_types: *const PlumageFeatherType,
+    /// Number of `feather_types`.
+    pub feather_type_count: u32,
+}
+
+/// One kind of feather of a type map: the proportions of its shape to the
+/// local spacing (`PlumageConfig.length_per_spacing` and
+/// `width_per_spacing` are the configuration's own). 0 takes the
+/// configuration's value; every type shares the configuration's shaft
+/// segments and bend limit, and its feather_length, feather_width and
+/// feather_thickness overrides when they are set.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct PlumageFeatherType {
+    /// Shaft length over the local spacing (0 to 100).
+    pub length_per_spacing: f32,
+    /// Vane width over the local spacing (0 to 100).
+    pub width_per_spacing: f32,
+    /// Multiplier of the thickness the width gives (0 to 100; 0 means 1).
+    pub thickness_scale: f32,
+}
+
+impl From<crate::feather::FeatherType> for PlumageFeatherType {
+    fn from(t: crate::feather::FeatherType) -> Self {
+        Self {
+            length_per_spacing: t.length_per_spacing,
+            width_per_spacing: t.width_per_spacing,
+            thickness_scale: t.thickness_scale,
+        }
+    }
 }
 
 /// A skeleton and the skin weights binding the mesh's vertices to it, for
@@ -85,6 +121,9 @@ impl PlumageMeshDesc {
             width_scale: std::ptr::null(),
             skeleton: std::ptr::null(),
             layer: std::ptr::null(),
+            feather_type: std::ptr::null(),
+            feather_types: std::ptr::null(),
+            feather_type_count: 0,
         }
     }
 }
@@ -94,7 +133,10 @@ impl PlumageMeshDesc {
 /// # Safety
 /// Every non-NULL pointer of `desc` points to as many elements as its count
 /// says, alive for `'a`.
-pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshInput<'a>, Failure> {
+pub(crate) unsafe fn read_mesh<'a>(
+    desc: *const PlumageMeshDesc,
+    types: &'a mut Vec<crate::feather::FeatherType>,
+) -> Result<MeshInput<'a>, Failure> {
     if desc.is_null() {
         return Err(Failure::null("mesh description"));
     }
@@ -125,8 +167,42 @@ pub(crate) unsafe fn read_mesh<'a>(desc: *const PlumageMeshDesc) -> Result<MeshI
             width_scale: optional_slice(d.width_scale, d.vertex_count),
             skeleton: read_skeleton(d.skeleton, d.vertex_count)?,
             layer: optional_slice(d.layer, d.vertex_count),
+            feather_types: read_feather_types(&d, types)?,
         })
     }
+}
+
+/// Borrowed view of the type map (`None` when `feather_type` is NULL), the
+/// table copied into `types`.
+///
+/// # Safety
+/// As for [`read_mesh`].
+unsafe fn read_feather_types<'a>(
+    d: &PlumageMeshDesc,
+    types: &'a mut Vec<crate::feather::FeatherType>,
+) -> Result<Option<crate::feather::FeatherTypeMap<'a>>, Failure> {
+    if d.feather_type.is_null() {
+        return Ok(None);
+    }
+    if d.feather_types.is_null() {
+        return Err(Failure::null("feather_types"));
+    }
+    let count = d.feather_type_count as usize;
+    if count == 0 || count > crate::feather::MAX_FEATHER_TYPES {
+        let text = format!("feather_type_count {count}: it must be 1 to {}", crate::feather::MAX_FEATHER_TYPES);
+        return Err(Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, text));
+    }
+    // SAFETY: non-NULL, `count` elements per the contract (bounded above).
+    let table = unsafe { std::slice::from_raw_parts(d.feather_types, count) };
+    types.clear();
+    types.extend(table.iter().map(|t| crate::feather::FeatherType {
+        length_per_spacing: t.length_per_spacing,
+        width_per_spacing: t.width_per_spacing,
+        thickness_scale: t.thickness_scale,
+    }));
+    // SAFETY: non-NULL, one per vertex per the contract.
+    let per_vertex = unsafe { std::slice::from_raw_parts(d.feather_type, d.vertex_count) };
+    Ok(Some(crate::feather::FeatherTypeMap { per_vertex, types }))
 }
 
 /// Borrowed view of a skeleton's arrays (`None` for NULL).

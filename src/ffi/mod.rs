@@ -58,7 +58,7 @@ pub use errors::*;
 pub use feathers::*;
 pub use instancing::*;
 pub use lifecycle::*;
-pub use mesh::{PlumageMeshDesc, PlumageSkeleton};
+pub use mesh::{PlumageFeatherType, PlumageMeshDesc, PlumageSkeleton};
 pub use state::*;
 pub use stats::*;
 pub use status::*;
@@ -124,20 +124,43 @@ pub unsafe extern "C" fn plumage_config_init_preset(cfg: *mut PlumageConfig, pre
         if cfg.is_null() {
             return Err(Failure::null("cfg"));
         }
-        let preset = match preset {
-            PLUMAGE_PRESET_FEATHERS => crate::Preset::Feathers,
-            PLUMAGE_PRESET_SCALES => crate::Preset::Scales,
-            PLUMAGE_PRESET_SLEEK => crate::Preset::Sleek,
-            PLUMAGE_PRESET_KITE => crate::Preset::Kite,
-            p => {
-                return Err(Failure::new(
-                    PLUMAGE_STATUS_INVALID_ARGUMENT,
-                    format!("preset {p} is not a PLUMAGE_PRESET_* value"),
-                ));
-            }
-        };
+        let preset = preset_of(preset)?;
         // SAFETY: non-NULL, points to a PlumageConfig (contract).
         unsafe { cfg.write(PlumageConfig::from_config(&crate::Config::preset(preset))) };
+        Ok(())
+    })
+}
+
+/// The preset a `PLUMAGE_PRESET_*` value names.
+fn preset_of(preset: u32) -> Result<crate::Preset, Failure> {
+    Ok(match preset {
+        PLUMAGE_PRESET_FEATHERS => crate::Preset::Feathers,
+        PLUMAGE_PRESET_SCALES => crate::Preset::Scales,
+        PLUMAGE_PRESET_SLEEK => crate::Preset::Sleek,
+        PLUMAGE_PRESET_KITE => crate::Preset::Kite,
+        p => {
+            let text = format!("preset {p} is not a PLUMAGE_PRESET_* value");
+            return Err(Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, text));
+        }
+    })
+}
+
+/// Fills `out` with the proportions of a preset (`PLUMAGE_PRESET_*`), for
+/// a type of `PlumageMeshDesc.feather_types`: `PLUMAGE_PRESET_SCALES` gives
+/// short, wide scales; the others the default feather. An unknown preset
+/// is refused with PLUMAGE_STATUS_INVALID_ARGUMENT and leaves `out` as it was.
+///
+/// # Safety
+/// `out` is NULL or points to writable memory for one `PlumageFeatherType`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn plumage_feather_type_init(out: *mut PlumageFeatherType, preset: u32) -> PlumageStatus {
+    without_system(|| {
+        if out.is_null() {
+            return Err(Failure::null("out"));
+        }
+        let t = crate::feather::FeatherType::of_preset(preset_of(preset)?);
+        // SAFETY: non-NULL, points to a PlumageFeatherType (contract).
+        unsafe { out.write(PlumageFeatherType::from(t)) };
         Ok(())
     })
 }

@@ -1,6 +1,7 @@
 //! The mesh as the caller hands it in, and the checks it must pass.
 
 use crate::error::{Error, ErrorKind, Result};
+use crate::feather::FeatherTypeMap;
 use crate::skeleton::SkeletonInput;
 
 /// A borrowed mesh in the caller's own vertex numbering.
@@ -24,6 +25,9 @@ pub struct MeshInput<'a> {
     /// Optional layer per vertex (finite): where two neighbouring feathers'
     /// layers differ, the one on the higher layer lies on top.
     pub layer: Option<&'a [f32]>,
+    /// Optional feather type per vertex: each feather takes the type of the
+    /// corner nearest its root.
+    pub feather_types: Option<FeatherTypeMap<'a>>,
 }
 
 impl<'a> MeshInput<'a> {
@@ -38,6 +42,7 @@ impl<'a> MeshInput<'a> {
             width_scale: None,
             skeleton: None,
             layer: None,
+            feather_types: None,
         }
     }
 
@@ -102,6 +107,9 @@ impl<'a> MeshInput<'a> {
         }
         if let Some(skeleton) = &self.skeleton {
             skeleton.check(n)?;
+        }
+        if let Some(types) = &self.feather_types {
+            types.check(n)?;
         }
         Ok(())
     }

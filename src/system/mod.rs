@@ -129,6 +129,19 @@ impl System {
                 dressing.layers = layers;
             }
         }
+        if let Some(map) = mesh.feather_types {
+            // Indices below 256 are exact as floats, so they weld as floats.
+            let per_vertex: Vec<f32> = map.per_vertex.iter().map(|&t| t as f32).collect();
+            let welded_types = welded.weld_attribute(&per_vertex, 1);
+            let triangles = dressing.surface.triangles();
+            let kinds: Vec<u8> = (dressing.roots.iter())
+                .map(|r| {
+                    let corner = (0..3).max_by(|&a, &b| r.point.bary[a].total_cmp(&r.point.bary[b])).unwrap_or(0);
+                    welded_types[triangles[r.point.face as usize][corner] as usize] as u8
+                })
+                .collect();
+            dressing.retype(map.types, &kinds);
+        }
         // The metrics are measured below, beside the static adjustment.
         let sampling_report = SamplingReport {
             roots: dressing.len(),
