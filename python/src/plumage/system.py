@@ -160,14 +160,16 @@ def _skeleton_struct(value: Union[Skeleton, Mapping[str, Any]], n: int) -> Tuple
     head = parts["head_joint"]
     if isinstance(head, bool) or not isinstance(head, (int, np.integer)) or not -1 <= int(head) < joints:
         raise PlumageError(_ffi.STATUS_INDEX_OUT_OF_RANGE, f"skeleton.head_joint: expected -1 or a joint index below {joints}, got {head!r}")
-    arrays = [positions, np.ascontiguousarray(parents, dtype=np.int32), np.ascontiguousarray(vj, dtype=np.uint32), vw]
+    weights_c: FloatArray = np.ascontiguousarray(vw, dtype=np.float32)
+    parents_c, joints_c = np.ascontiguousarray(parents, dtype=np.int32), np.ascontiguousarray(vj, dtype=np.uint32)
+    arrays: List[np.ndarray] = [positions, parents_c, joints_c, weights_c]
     raw = _ffi.Skeleton()
     raw.joint_count = joints
     raw.influences = k
-    raw.joint_positions = _fptr(arrays[0])
-    raw.joint_parents = arrays[1].ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
-    raw.vertex_joints = arrays[2].ctypes.data_as(ctypes.POINTER(ctypes.c_uint32))
-    raw.vertex_weights = _fptr(arrays[3])
+    raw.joint_positions = _fptr(positions)
+    raw.joint_parents = parents_c.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
+    raw.vertex_joints = joints_c.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32))
+    raw.vertex_weights = _fptr(weights_c)
     raw.head_joint = int(head)
     return raw, arrays
 
