@@ -388,6 +388,19 @@ def test_skeleton_and_layers_are_the_hosts(host, tmp_path) -> None:
     assert "skeleton" not in run.maps and run.config["flow_source"] is not None
 
 
+def test_dress_through_the_host_passes_the_skeleton_and_layers(host, tmp_path) -> None:
+    """`dress --host` drives the library from the host's pose file, skeleton and layer map included: the same USD."""
+    pytest.importorskip("pxr", reason="usd-core is not installed")
+    bird = str(shared_model("bird"))
+    options = ["--feathers", "200", "--frames", "2", "--threads", "1", "--layer-map", "TEXCOORD_0:1", "--quiet"]
+    native = dress(tmp_path, bird, "--out", "native.usda", *options)
+    hosted = dress(tmp_path, bird, "--out", "hosted.usda", "--host", host, *options)
+    assert native.returncode == 0 and hosted.returncode == 0, native.stderr + hosted.stderr
+    assert (tmp_path / "native.usda").read_bytes() == (tmp_path / "hosted.usda").read_bytes()
+    off = dress(tmp_path, bird, "--out", "off.usda", "--skeleton-flow", "off", *options)
+    assert off.returncode == 0 and (tmp_path / "off.usda").read_bytes() != (tmp_path / "native.usda").read_bytes()
+
+
 def test_pose_file_versions(host, tmp_path) -> None:
     """Version 2 only when a layer map or a skeleton is written; version 1 files read as before."""
     import struct
