@@ -148,6 +148,133 @@ def vertex_map(mesh: bpy.types.Mesh, spec: str, components: int) -> Optional[np.
     return np.ascontiguousarray(out[:, 0] if components == 1 else out)
 
 
+def dress_armature(obj: bpy.types.Object, sources: List[bpy.types.Object]) -> Optional[bpy.types.Object]:
+    """The armature whose skeleton the coat follows: the dressed armature, or
+    the one a dressed mesh's Armature modifier (else its parent) names."""
+    if obj.type == "ARMATURE":
+        return obj
+    for o in [obj] + [s for s in sources if s is not obj]:
+        for m in o.modifiers:
+            if m.type == "ARMATURE" and m.object is not None and m.object.type == "ARMATURE":
+                return m.object
+        if o.parent is not None and o.parent.type == "ARMATURE":
+            return o.parent
+    return None
+
+
+SKELETON_UP_FORWARD = np.array([0.0, -1.0, 1.0])  # Blender's up (+Z) and forward (-Y): where the head is looked for
+MAX_INFLUENCES = 16
+
+
+def armature_skeleton(arm: bpy.types.Object, sources: List[bpy.types.Object], counts: List[int]) -> Optional[Dict[str, Any]]:
+    """`plumage.System(skeleton=...)` for the meshes `sources` bound to `arm`,
+    or None when no vertex is bound to a bone (or a modifier changes a
+    mesh's vertex count, so that vertex groups no longer name its vertices).
+
+    Joints: every bone's head, in world space, as posed at the current frame
+    (the frame the coat is dressed at, so in the space of the dressed
+    positions; the rest pose when the armature stands in it), parents the
+    parent bones; plus the tail of each bone no connected child continues
+    from (its parent that bone), so that a limb's or the neck's last bone
+    still has a direction. Weights:
+    per vertex, the vertex groups named after deforming bones, normalised
+    (the 16 largest at most); a mesh parented to a bone without such groups
+    rides that bone (weight 1). The head is the end joint farthest up and
+    forward (Blender: +Z, -Y)."""
+    bones = list(arm.data.bones)
+    if not bones:
+        return None
+    index = {b.name: k for k, b in enumerate(bones)}
+    world = np.array(arm.matrix_world, dtype=np.float64)
+    pose = arm.pose.bones
+
+    def to_world(v: Any) -> List[float]:
+        return list(world[:3, :3] @ np.array(v, dtype=np.float64) + world[:3, 3])
+
+    positions = [to_world(pose[b.name].head) for b in bones]
+    parents = [index[b.parent.name] if b.parent is not None else -1 for b in bones]
+    for k, b in enumerate(bones):
+        if not any(c.use_connect for c in b.children):  # no child continues from its tail
+            positions.append(to_world(pose[b.name].tail))
+            parents.append(k)
+    per_vertex: List[List[Tuple[int, float]]] = []
+    for src, n in zip(sources, counts):
+        if len(src.data.vertices) != n:
+            return None
+        group_joint = {g.index: index[g.name] for g in src.vertex_groups if g.name in index and bones[index[g.name]].use_deform}
+        rider = index.get(src.parent_bone) if src.parent is arm and src.parent_type == "BONE" else None
+        for v in src.data.vertices:
+            inf = [(group_joint[g.group], float(g.weight)) for g in v.groups if g.group in group_joint and g.weight > 0]
+            if not inf and rider is not None:
+                inf = [(rider, 1.0)]
+            inf.sort(key=lambda jw: -jw[1])
+            per_vertex.append(inf[:MAX_INFLUENCES])
+    if not any(per_vertex):
+        return None
+    width = max(1, max(len(inf) for inf in per_vertex))
+    joints = np.zeros((len(per_vertex), width), np.uint32)
+    weights = np.zeros((len(per_vertex), width), np.float32)
+    for v, inf in enumerate(per_vertex):
+        total = sum(w for _, w in inf)
+        for k, (j, w) in enumerate(inf):
+            joints[v, k], weights[v, k] = j, w / total
+    positions_arr = np.array(positions, np.float32)
+    parents_arr = np.array(parents, np.int32)
+    return {"joint_positions": positions_arr, "joint_parents": parents_arr, "vertex_joints": joints, "vertex_weights": weights,
+            "head_joint": skeleton_head(positions_arr, parents_arr, joints, weights)}
+
+
+def skeleton_head(positions: np.ndarray, parents: np.ndarray, joints: np.ndarray, weights: np.ndarray) -> int:
+    """The end joint (one bone attached) farthest up and forward among the
+    joints the library keeps (weighted, or below a weighted joint)."""
+    n = len(parents)
+    weighted = np.zeros(n, bool)
+    weighted[joints[weights > 0]] = True
+    kept = weighted.copy()
+    for _ in range(n):  # down the trees: a joint below a kept one is kept
+        below = ~kept & (parents >= 0)
+        grow = below.copy()
+        grow[below] = kept[parents[below]]
+        if not grow.any():
+            break
+        kept |= grow
+    degree = np.zeros(n, int)
+    for j in range(n):
+        if kept[j] and parents[j] >= 0 and kept[parents[j]]:
+            degree[j] += 1
+            degree[parents[j]] += 1
+    ends = [j for j in range(n) if kept[j] and degree[j] <= 1]
+    if not ends:
+        return -1
+    return int(max(ends, key=lambda j: (float(positions[j].astype(np.float64) @ SKELETON_UP_FORWARD), -j)))
+
+
+def front_source(positions: np.ndarray) -> Tuple[float, float, float]:
+    """The front-most vertex (Blender models face -Y; the first of equals): feathers flow away from it."""
+    return tuple(float(x) for x in positions[int(np.argmax(-positions[:, 1]))])  # type: ignore[return-value]
+
+
+def layer_map(sources: List[bpy.types.Object], counts: List[int], group: str) -> Optional[np.ndarray]:
+    """Per vertex its weight in the vertex group `group` (0 outside it or on a mesh without it): the painted layer."""
+    if not group:
+        return None
+    if not any(group in src.vertex_groups for src in sources):
+        raise ValueError(f"no dressed mesh has a vertex group {group!r} (Layer group)")
+    parts = []
+    for src, n in zip(sources, counts):
+        if len(src.data.vertices) != n:
+            raise ValueError(f"{src.name!r}: the modifiers change the vertex count ({len(src.data.vertices)} -> {n}): the layer group cannot be read")
+        values = np.zeros(n, np.float32)
+        g = src.vertex_groups.get(group)
+        if g is not None:
+            for v in src.data.vertices:
+                for e in v.groups:
+                    if e.group == g.index:
+                        values[v.index] = e.weight
+        parts.append(values)
+    return np.concatenate(parts)
+
+
 def system_config(props: "PlumageSettings") -> Dict[str, Any]:
     cfg: Dict[str, Any] = {"seed": props.seed, "threads": props.threads, "mode": props.mode.lower(), "preset": props.preset.lower()}
     # Checkpoints every few frames: a jump seeks and replays, so scrubbing
@@ -192,12 +319,26 @@ def dress_inputs(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str,
                 part = part @ np.array(src.matrix_world, dtype=np.float32)[:3, :3].T
             parts.append(part)
         maps[key] = np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
+    maps["layer"] = layer_map(sources, counts, props.layer_group)
+    config = system_config(props)
+    # the flow: the armature's bones unless another is chosen; without a
+    # bound armature, away from the front-most vertex
+    flow_from = {"AXIS": "axis", "ATTRIBUTE": "attribute", "AUTO": "mesh"}.get(props.flow, "front")
+    skeleton = None
+    if props.flow == "SKELETON":
+        arm = dress_armature(obj, sources)
+        skeleton = armature_skeleton(arm, sources, counts) if arm is not None else None
+        flow_from = "skeleton" if skeleton is not None else "front"
+    if flow_from == "front" and len(positions):
+        config["flow_source"] = front_source(positions)
     return {"positions": positions, "triangles": triangles, "counts": counts, "sources": [o.name for o in sources],
-            "maps": maps, "config": system_config(props), "frame": context.scene.frame_current}
+            "maps": maps, "skeleton": skeleton, "flow_from": flow_from, "config": config, "frame": context.scene.frame_current}
 
 
 def make_system(inputs: Dict[str, Any], progress: Any = None) -> Any:
     maps = {k: v for k, v in inputs["maps"].items() if v is not None}
+    if inputs.get("skeleton") is not None:
+        maps["skeleton"] = inputs["skeleton"]
     return plumage.System(inputs["positions"], inputs["triangles"], progress=progress, **maps, **inputs["config"])
 
 
@@ -489,6 +630,8 @@ def bake(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]:
     pointcache.write_pc2(path, positions, start_frame=frames[0], sample_rate=1.0)
     inputs = run["inputs"]
     maps = {f"map_{k}": v for k, v in inputs["maps"].items() if v is not None}
+    if inputs.get("skeleton") is not None:
+        maps.update({f"skeleton_{k}": np.asarray(v) for k, v in inputs["skeleton"].items()})
     np.savez(pointcache.sidecar_path(path), positions=inputs["positions"], triangles=inputs["triangles"], counts=np.array(inputs["counts"]),
              sources=np.array(inputs["sources"]), config=np.array(json.dumps(inputs["config"])), dressed_frame=inputs["frame"],
              frames=np.array(frames), state=np.frombuffer(state, dtype=np.uint8), state_frame=frames[-1], **maps)
@@ -511,8 +654,12 @@ def rebuild(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]
         maps = {k[len("map_"):]: saved[k] for k in saved.files if k.startswith("map_")}
         inputs = {"positions": saved["positions"], "triangles": saved["triangles"], "counts": [int(c) for c in saved["counts"]],
                   "sources": [str(s) for s in saved["sources"]], "config": json.loads(str(saved["config"])),
-                  "maps": {k: maps.get(k) for k in ("spacing_scale", "length_scale", "width_scale", "orientations")},
+                  "maps": {k: maps.get(k) for k in ("spacing_scale", "length_scale", "width_scale", "orientations", "layer")},
                   "frame": int(saved["dressed_frame"])}
+        skeleton = {k[len("skeleton_"):]: saved[k] for k in saved.files if k.startswith("skeleton_")}
+        if skeleton:
+            skeleton["head_joint"] = int(skeleton.get("head_joint", -1))
+        inputs["skeleton"] = skeleton or None
         state, state_frame = saved["state"].tobytes(), int(saved["state_frame"])
     system = make_system(inputs)
     system.load_state(state)
@@ -534,17 +681,23 @@ class PlumageSettings(bpy.types.PropertyGroup):
     feather_width: FloatProperty(name="Width", default=0.0, min=0.0, subtype="DISTANCE", description="0 = derived from the spacing")
     flow: EnumProperty(
         name="Flow",
-        items=[
-            ("AUTO", "From the mesh", "The library derives the flow from the mesh's principal axis"),
-            ("AXIS", "Axis", "Feathers point along this world axis (the coat is solved in world space)"),
-            ("ATTRIBUTE", "Vertex attribute", "A per-vertex direction attribute"),
+        items=[  # the numbers keep what files saved before Skeleton and Front meant
+            ("SKELETON", "Skeleton", "Feathers follow the armature's bones from the head down the trunk and out along each limb "
+             "(without an armature bound to the meshes: from the front)", 3),
+            ("FRONT", "Front", "Feathers flow away from the front-most vertex (-Y) along the surface", 4),
+            ("AXIS", "Axis", "Feathers point along this world axis (the coat is solved in world space)", 1),
+            ("ATTRIBUTE", "Vertex attribute", "A per-vertex direction attribute", 2),
+            ("AUTO", "Mesh axis", "The library derives the flow from the mesh's principal axis", 0),
         ],
+        default="SKELETON",
     )
     flow_axis: EnumProperty(name="Axis", items=[(a, a, "") for a in ("X", "Y", "Z", "-X", "-Y", "-Z")], default="-Y")
     flow_attribute: StringProperty(name="Flow attribute", description="Vector attribute NAME or NAME:C")
     spacing_map: StringProperty(name="Spacing map", description="Attribute NAME or NAME:C (0 = bare skin)")
     length_map: StringProperty(name="Length map")
     width_map: StringProperty(name="Width map")
+    layer_group: StringProperty(name="Layer group", description="Vertex group painting the layers: where neighbouring feathers' "
+                                "weights differ, the higher lies on top (empty: no layers)")
     mode: EnumProperty(name="Mode", items=[("INCREMENTAL", "Incremental", ""), ("LEGACY", "Legacy", ""), ("REBUILD", "Rebuild", "")])
     preset: EnumProperty(
         name="Preset",
@@ -591,7 +744,7 @@ class PLUMAGE_OT_dress(bpy.types.Operator):
         except (plumage.PlumageError, ValueError) as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        self.report({"INFO"}, f"{run['system'].feather_count} feathers on {len(run['sources'])} meshes")
+        self.report({"INFO"}, f"{run['system'].feather_count} feathers on {len(run['sources'])} meshes (flow: {run['inputs']['flow_from']})")
         return {"FINISHED"}
 
     def invoke(self, context: bpy.types.Context, event: Any) -> set:
@@ -647,7 +800,7 @@ class PLUMAGE_OT_dress(bpy.types.Operator):
             job.system.close()
             return {"CANCELLED"}
         run = install_run(context, obj, job.system, self._inputs)
-        self.report({"INFO"}, f"{run['system'].feather_count} feathers on {len(run['sources'])} meshes")
+        self.report({"INFO"}, f"{run['system'].feather_count} feathers on {len(run['sources'])} meshes (flow: {run['inputs']['flow_from']})")
         return {"FINISHED"}
 
 
@@ -720,8 +873,9 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
         row.prop(props, "feather_length")
         row.prop(props, "feather_width")
         layout.prop(props, "flow")
-        if props.flow != "AUTO":
+        if props.flow in ("AXIS", "ATTRIBUTE"):
             layout.prop(props, "flow_axis" if props.flow == "AXIS" else "flow_attribute")
+        layout.prop(props, "layer_group")
         layout.prop(props, "spacing_map")
         layout.prop(props, "length_map")
         layout.prop(props, "width_map")

@@ -5,9 +5,11 @@ processes on the same files:
     blender -b --factory-startup --python-exit-code 1 OUT_DIR/character.blend --python blender_character.py -- play OUT_DIR
     blender -b --factory-startup --python-exit-code 1 --python blender_character.py -- rebuild ADDON_ZIP OUT_DIR
 
-build: makes a character (an armature with two bones, two meshes skinned to
-it, a third parented rigidly to the second bone, an action over frames 1..20
-that also moves the armature object), dresses the armature as one coat,
+build: makes a character (an armature with three bones, three meshes
+skinned to it, one of them a limb on the third bone, a fourth parented
+rigidly to the second bone, a painted layer group, an action over frames
+1..20 that also moves the armature object), dresses the armature as one coat
+(the flow from its skeleton: the limb's feathers run along its bone),
 plays 1..20 checking the library's validation at each frame, scrubs 12, 3,
 20, 12 comparing with playback, checks the shader attributes, bakes to
 OUT_DIR/character.pc2 and saves OUT_DIR/character.blend.
@@ -104,6 +106,9 @@ def build(addon_zip, out_dir):
     b2 = arm.data.edit_bones.new("B2")
     b2.head, b2.tail = (0, 0, 1), (0, 0, 2)
     b2.parent, b2.use_connect = b1, True
+    b3 = arm.data.edit_bones.new("B3")  # a limb off B2 (a shoulder), out along +x
+    b3.head, b3.tail = (0.6, 0, 0.9), (1.5, 0, 0.9)
+    b3.parent, b3.use_connect = b2, False
     bpy.ops.object.mode_set(mode="OBJECT")
 
     # a torso bending with B2 above z = 0.9, a head on B2, a crest parented to B2's tail
@@ -117,6 +122,13 @@ def build(addon_zip, out_dir):
     bpy.context.view_layer.update()
     crest.matrix_world = Matrix.Identity(4)  # stays where it was built, then follows the bone
     bpy.context.view_layer.update()
+    # a limb skinned wholly to B3, beside the torso
+    limb = sphere_object("Wing", (1.05, 0, 0.9), (0.42, 0.12, 0.12), 32, 12)
+    limb.vertex_groups.new(name="B3").add([v.index for v in limb.data.vertices], 1.0, "REPLACE")
+    limb.modifiers.new("Armature", "ARMATURE").object = arm
+    # a painted layer: the torso's upper half on top
+    layer = torso.vertex_groups.new(name="Layer")
+    layer.add([v.index for v in torso.data.vertices if v.co.z > 0.8], 1.0, "REPLACE")
 
     # the action: B2 bends forward, B1 twists, the rig walks along x
     for pb in arm.pose.bones:
@@ -133,8 +145,22 @@ def build(addon_zip, out_dir):
     props = arm.plumage
     props.target_feathers = 700
     props.threads = 2
-    props.flow = "AXIS"
-    props.flow_axis = "-Z"
+    props.layer_group = "Layer"
+    # the flow: the default (the armature's skeleton); an explicit axis or the front instead
+    inputs = plumage_feathers.dress_inputs(bpy.context, arm)
+    result["flow"] = {"default": props.flow, "flow_from": inputs["flow_from"], "no_source": "flow_source" not in inputs["config"],
+                      "joints": len(inputs["skeleton"]["joint_parents"]), "head": inputs["skeleton"]["head_joint"],
+                      "head_at": [float(x) for x in inputs["skeleton"]["joint_positions"][inputs["skeleton"]["head_joint"]]],
+                      "weights_sum_1": bool(np.allclose(inputs["skeleton"]["vertex_weights"].sum(axis=1), 1, atol=1e-6)),
+                      "layer_on": int((inputs["maps"]["layer"] > 0).sum()),
+                      "layer_expected": sum(1 for v in torso.data.vertices if v.co.z > 0.8)}
+    props.flow, props.flow_axis = "AXIS", "-Z"
+    other = plumage_feathers.dress_inputs(bpy.context, arm)
+    result["flow"]["axis"] = [other["flow_from"], other["skeleton"] is None, other["config"].get("flow_axis")]
+    props.flow = "FRONT"
+    other = plumage_feathers.dress_inputs(bpy.context, arm)
+    result["flow"]["front"] = [other["flow_from"], other["skeleton"] is None, other["config"].get("flow_source")]
+    props.flow = "SKELETON"
     for o in bpy.context.selected_objects:
         o.select_set(False)
     bpy.context.view_layer.objects.active = arm
@@ -174,6 +200,22 @@ def build(addon_zip, out_dir):
     result["feathers"] = system.feather_count
     result["modal_finish"]["is_dress"] = modal_state == system.save_state()
     result["feathers_object_identity"] = feathers_obj.parent is None and np.allclose(np.array(feathers_obj.matrix_world), np.eye(4))
+    # the limb's feathers run along its bone (+x), away from the body: the angle between each
+    # feather's direction and the bone's direction in the skin's tangent plane, mid-limb
+    f = system.feathers()
+    mid = (f["root"][:, 0] > 0.8) & (f["root"][:, 0] < 1.3)
+    bone = np.array([1.0, 0.0, 0.0])
+    n = f["normal"][mid].astype(np.float64)
+    along = bone - (n @ bone)[:, None] * n
+    along /= np.linalg.norm(along, axis=1, keepdims=True)
+    d = f["direction"][mid].astype(np.float64)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    angles = np.degrees(np.arccos(np.clip((d * along).sum(axis=1), -1, 1)))
+    result["limb"] = {"feathers": int(mid.sum()), "median_deg": float(np.median(angles)), "p90_deg": float(np.percentile(angles, 90)),
+                      "max_deg": float(angles.max())}
+    # the torso's side below the limb runs down the body (from the head at the top)
+    side = (np.abs(f["root"][:, 2] - 0.5) < 0.3) & (np.hypot(f["root"][:, 0], f["root"][:, 1]) > 0.3)
+    result["torso_down"] = float(np.median(-f["direction"][side, 2]))
 
     # shader attributes
     geo = system.feather_geometry()

@@ -18,9 +18,12 @@ PoseWriter::PoseWriter(const std::string& path, PlumageConfig cfg, double fps, c
     cfg.progress = nullptr;
     cfg.progress_user_data = nullptr;
     const char magic[8] = {'P', 'L', 'M', 'P', 'O', 'S', 'E', '\0'};
-    const uint32_t head[2] = {1, static_cast<uint32_t>(sizeof cfg)};
+    // Version 1 unless the blocks version 2 added are present: older readers keep reading the rest.
+    const bool v2 = !maps.layer.empty() || maps.skeleton.has_value();
+    const uint32_t head[2] = {v2 ? 2u : 1u, static_cast<uint32_t>(sizeof cfg)};
     const uint64_t counts[3] = {rest.size() / 3, indices.size() / 3, times.size()};
-    const uint32_t mask = (maps.spacing.empty() ? 0u : 1u) | (maps.length.empty() ? 0u : 2u) | (maps.width.empty() ? 0u : 4u) | (maps.flow.empty() ? 0u : 8u);
+    const uint32_t mask = (maps.spacing.empty() ? 0u : 1u) | (maps.length.empty() ? 0u : 2u) | (maps.width.empty() ? 0u : 4u) | (maps.flow.empty() ? 0u : 8u) |
+                          (maps.layer.empty() ? 0u : 16u) | (maps.skeleton ? 32u : 0u);
     const uint32_t tail[2] = {mask, 0};
     write(magic, sizeof magic);
     write(head, sizeof head);
@@ -31,7 +34,20 @@ PoseWriter::PoseWriter(const std::string& path, PlumageConfig cfg, double fps, c
     write(rest.data(), rest.size() * sizeof(float));
     write(indices.data(), indices.size() * sizeof(uint32_t));
     write(times.data(), times.size() * sizeof(double));
-    for (const std::vector<float>* m : {&maps.spacing, &maps.length, &maps.width, &maps.flow}) write(m->data(), m->size() * sizeof(float));
+    for (const std::vector<float>* m : {&maps.spacing, &maps.length, &maps.width, &maps.flow, &maps.layer}) write(m->data(), m->size() * sizeof(float));
+    if (maps.skeleton) {
+        const SkinSkeleton& k = *maps.skeleton;
+        const int32_t head_joint = -1;  // as create_system passes it
+        const uint32_t counts_k[2] = {static_cast<uint32_t>(k.joint_count()), k.influences};
+        const uint32_t reserved = 0;
+        write(counts_k, sizeof counts_k);
+        write(&head_joint, sizeof head_joint);
+        write(&reserved, sizeof reserved);
+        write(k.joint_positions.data(), k.joint_positions.size() * sizeof(float));
+        write(k.joint_parents.data(), k.joint_parents.size() * sizeof(int32_t));
+        write(k.vertex_joints.data(), k.vertex_joints.size() * sizeof(uint32_t));
+        write(k.vertex_weights.data(), k.vertex_weights.size() * sizeof(float));
+    }
 }
 
 PoseWriter::~PoseWriter() {

@@ -4,17 +4,23 @@
 // the library with exactly the same input. Little-endian, native layout:
 //
 //   char     magic[8]        "PLMPOSE\0"
-//   uint32_t version         1
+//   uint32_t version         1, or 2 when a layer map or a skeleton is present
 //   uint32_t config_size     sizeof(PlumageConfig)
 //   uint64_t vertex_count, triangle_count, frame_count
 //   double   fps
-//   uint32_t maps            bit 0 spacing, 1 length, 2 width, 3 flow
+//   uint32_t maps            bit 0 spacing, 1 length, 2 width, 3 flow; version 2 also
+//                            bit 4 layer, 5 skeleton
 //   uint32_t reserved        0
 //   PlumageConfig config     as created with (progress pointers zeroed)
 //   float    rest[3 * vertex_count]
 //   uint32_t indices[3 * triangle_count]
 //   double   times[frame_count]           clip seconds of each frame
 //   float    spacing[vertex_count], length[...], width[...], flow[3 * vertex_count]   (those present)
+//   float    layer[vertex_count]                                                       (if present)
+//   skeleton (if present): uint32_t joint_count, influences; int32_t head_joint;
+//            uint32_t reserved 0; float joint_positions[3 * joint_count];
+//            int32_t joint_parents[joint_count]; uint32_t vertex_joints[influences * vertex_count];
+//            float vertex_weights[influences * vertex_count]   (as PlumageSkeleton gets them)
 //   float    frames[frame_count][3 * vertex_count]
 #pragma once
 

@@ -640,6 +640,34 @@ int poses() {
     const uint64_t nv = 19 * 17 + 2, nt = 2 * 16 * 18, nf = 2;
     CHECK(version == 1 && config_size >= 100 && counts[0] == nv && counts[1] == nt && counts[2] == nf && fps == 30 && maps == 0);
     CHECK(bytes.size() == 56 + config_size + 12 * nv + 12 * nt + 8 * nf + 12 * nv * nf);
+    // A skinned model: version 2, the layer map and the skeleton after the other maps.
+    const std::string fox = (std::filesystem::path(g_data) / "Fox.glb").string();
+    if (std::filesystem::exists(fox)) {
+        const Run s = run_host({fox, "--frames", "1", "--feathers", "60", "--validate", "none", "--layer-map", "TEXCOORD_0:1", "--poses", file});
+        CHECK_MSG(s.exit_code == 0, s.err);
+        const std::string b = slurp(file);
+        CHECK(b.size() > 56);
+        if (b.size() <= 56) return 0;
+        uint64_t c[3] = {};
+        std::memcpy(&version, b.data() + 8, 4);
+        std::memcpy(c, b.data() + 16, 24);
+        std::memcpy(&maps, b.data() + 48, 4);
+        CHECK(version == 2 && maps == (16u | 32u) && c[2] == 1);
+        const size_t at = 56 + config_size + 12 * c[0] + 12 * c[1] + 8 * c[2] + 4 * c[0];
+        CHECK(b.size() > at + 16);
+        if (b.size() <= at + 16) return 0;
+        uint32_t joints = 0, influences = 0;
+        int32_t head = 0;
+        std::memcpy(&joints, b.data() + at, 4);
+        std::memcpy(&influences, b.data() + at + 4, 4);
+        std::memcpy(&head, b.data() + at + 8, 4);
+        CHECK(joints == 23 && influences >= 1 && influences <= 4 && head == -1);
+        CHECK(b.size() == at + 16 + 16 * joints + 8 * influences * c[0] + 12 * c[0] * c[2]);
+        const Run off = run_host({fox, "--frames", "0", "--feathers", "60", "--validate", "none", "--skeleton-flow", "off", "--poses", file});
+        CHECK_MSG(off.exit_code == 0, off.err);
+        const std::string v1 = slurp(file);
+        CHECK(v1.size() > 56 && v1[8] == 1);  // no skeleton, no layer: version 1 as before
+    }
     std::ofstream(path("plain_file")) << "x";  // a file where a directory should be
     EXPECT_REFUSAL(run_host({"--frames", "1", "--poses", path("plain_file") + "/x.poses"}), 1, "cannot write");
     EXPECT_REFUSAL(run_host({"--frames", "1", "--poses="}), 2, "--poses: empty value");

@@ -115,8 +115,10 @@ def _blender_json(blender: str, args: list, env: dict, timeout: int = 120, facto
 
 
 def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening(tmp_path: Path) -> None:
-    """An armature with two bones, two skinned meshes and a mesh parented to a
-    bone, animated over frames 1..20, dressed as one coat: valid at every
+    """An armature with three bones, three skinned meshes (one a limb) and a mesh
+    parented to a bone, animated over frames 1..20, dressed as one coat
+    following the skeleton (the limb's feathers along its bone) with a
+    painted layer group: valid at every
     frame, scrubbing 12, 3, 20, 12 shows playback, the .pc2 bake plays in a
     new Blender without the package, and the live system comes back from the
     state beside the cache in another."""
@@ -130,7 +132,16 @@ def test_character_is_one_coat_baked_to_a_point_cache_that_plays_after_reopening
     env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
 
     built = _blender_json(blender, ["--python", script, "--", "build", str(addon_zip), str(out)], env)
-    assert built["sources"] == ["Crest", "Head", "Torso"]  # two skinned meshes and the bone-parented one, once each
+    assert built["sources"] == ["Crest", "Head", "Torso", "Wing"]  # three skinned meshes and the bone-parented one, once each
+    # the flow follows the armature by default: bones' heads plus the two leaf bones' tails, the head the top of B2
+    flow = built["flow"]
+    assert flow["default"] == "SKELETON" and flow["flow_from"] == "skeleton" and flow["no_source"], flow
+    assert flow["joints"] == 5 and flow["head_at"] == [0.0, 0.0, 2.0] and flow["weights_sum_1"], flow
+    assert flow["layer_on"] == flow["layer_expected"] > 0, flow
+    assert flow["axis"] == ["axis", True, [0, 0, -1]] and flow["front"][:2] == ["front", True] and len(flow["front"][2]) == 3, flow
+    limb = built["limb"]
+    assert limb["feathers"] >= 15 and limb["p90_deg"] < 10.0, limb  # along the limb's bone
+    assert built["torso_down"] > 0.8, (built["torso_down"], limb)  # down the trunk, away from the head
     assert 500 <= built["feathers"] <= 1000 and built["feathers_object_identity"]
     assert all(built["attributes"][k] for k in built["attributes"]), built["attributes"]
     assert built["modal_cancel"]["status"] == ["CANCELLED"] and built["modal_cancel"]["no_run"] and built["modal_cancel"]["no_feathers"], built

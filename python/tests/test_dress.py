@@ -155,7 +155,8 @@ def dress(tmp_path: Path, *args: str) -> subprocess.CompletedProcess:
                           cwd=tmp_path)
 
 
-@pytest.mark.parametrize("name,preset", [("Fox", "kite"), ("Flamingo", "feathers"), ("bird", "scales"), ("builtin", "feathers")])
+@pytest.mark.parametrize("name,preset", [("Fox", "kite"), ("Flamingo", "feathers"), ("bird", "scales"), ("builtin", "feathers"),
+                                         ("Fox", "feathers"), ("bird", "feathers")])
 def test_usd_feathers_are_the_hosts_glb(host, tmp_path, name, preset) -> None:
     """The USD of `dress` (no host) against the host's .glb of the same run, frame by frame."""
     pytest.importorskip("pxr", reason="usd-core is not installed")
@@ -325,6 +326,98 @@ def test_skeleton_of_a_skinned_mesh() -> None:
     assert gltf.Scene(shared_model("Flamingo")).parts[0].skeleton() is None
 
 
+def assert_same_skeleton(ours, hosts) -> None:
+    for key in ("joint_positions", "joint_parents", "vertex_joints", "vertex_weights"):
+        a, b = getattr(ours, key), getattr(hosts, key)
+        assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), key
+    assert ours.head_joint == hosts.head_joint == -1
+
+
+def two_skinned_meshes(path: Path) -> Path:
+    """The Fox with its skinned mesh shown twice (a second mesh on the same accessors, skinned to the same skin)."""
+    import pygltflib
+
+    g = pygltflib.GLTF2().load(str(shared_model("Fox")))
+    first = next(i for i, n in enumerate(g.nodes) if n.mesh == 0)
+    twin = pygltflib.Mesh(name="Twin", primitives=[pygltflib.Primitive(attributes=p.attributes, indices=p.indices, mode=p.mode)
+                                                   for p in g.meshes[0].primitives])
+    g.meshes.append(twin)
+    g.nodes.append(pygltflib.Node(name="twin", mesh=len(g.meshes) - 1, skin=g.nodes[first].skin))
+    g.scenes[g.scene or 0].nodes.append(len(g.nodes) - 1)
+    g.save(str(path))
+    return path
+
+
+def test_skeleton_and_layers_are_the_hosts(host, tmp_path) -> None:
+    """With no flow given, a skinned subject hands the library its skeleton (and no flow source), byte for byte the
+    host's; --skeleton-flow off and an explicit flow give the front-most vertex or the flow instead, as the host."""
+    from plumage.__main__ import dress_parser, prepare
+
+    def both(model: Path, *extra: str):
+        poses = host_poses(host, tmp_path, str(model), "--frames", "1", *extra, glb=False)
+        run = prepare(dress_parser().parse_args([str(model), "--out", "x.usda", "--frames", "1", "--feathers", "60", "--threads", "1", *extra]))
+        assert sorted(run.maps) == sorted(poses.maps), extra
+        assert run.config.get("flow_source") == poses.config["flow_source"], extra
+        return run, poses
+
+    for name in ("Fox", "bird"):
+        run, poses = both(shared_model(name))
+        assert list(run.maps) == ["skeleton"] and run.config.get("flow_source") is None
+        assert_same_skeleton(run.maps["skeleton"], poses.maps["skeleton"])
+        assert run.maps["skeleton"].vertex_joints.shape[0] == len(run.rest)
+        for extra in (["--skeleton-flow", "off"], ["--flow", "0,0,-1"], ["--flow-source", "0,1,2"], ["--flow-map", "NORMAL"]):
+            run, poses = both(shared_model(name), *extra)
+            assert "skeleton" not in run.maps, extra
+    # influences packed first (weight > 0, renormalised), as many slots as the widest vertex needs
+    bird = gltf.Scene(shared_model("bird")).skin_skeleton()
+    assert bird is not None and bird.influences == 3 and (bird.vertex_weights[:, 0] > 0).all()
+    assert np.allclose(bird.vertex_weights.sum(axis=1), 1, atol=1e-6)
+    # a layer map from a vertex attribute, with the skeleton
+    run, poses = both(shared_model("bird"), "--layer-map", "TEXCOORD_0:1")
+    assert sorted(run.maps) == ["layer", "skeleton"] and run.maps["layer"].tobytes() == poses.maps["layer"].tobytes()
+    # several skinned meshes: their skeletons one after the other, the joints offset
+    twins = two_skinned_meshes(tmp_path / "twins.glb")
+    run, poses = both(twins, "--mesh", "all")
+    one = gltf.Scene(shared_model("Fox")).skin_skeleton()
+    assert_same_skeleton(run.maps["skeleton"], poses.maps["skeleton"])
+    joints = len(one.joint_parents)
+    assert len(run.maps["skeleton"].joint_parents) == 2 * joints
+    assert np.array_equal(run.maps["skeleton"].vertex_joints[len(one.vertex_joints):], one.vertex_joints + joints)
+    # one skinned and one not: no skeleton, the front-most vertex
+    run, poses = both(shared_model("Fox"), "--mesh", "3", "--mesh", "0")
+    assert "skeleton" not in run.maps and run.config["flow_source"] is not None
+
+
+def test_dress_through_the_host_passes_the_skeleton_and_layers(host, tmp_path) -> None:
+    """`dress --host` drives the library from the host's pose file, skeleton and layer map included: the same USD."""
+    pytest.importorskip("pxr", reason="usd-core is not installed")
+    bird = str(shared_model("bird"))
+    options = ["--feathers", "200", "--frames", "2", "--threads", "1", "--layer-map", "TEXCOORD_0:1", "--quiet"]
+    native = dress(tmp_path, bird, "--out", "native.usda", *options)
+    hosted = dress(tmp_path, bird, "--out", "hosted.usda", "--host", host, *options)
+    assert native.returncode == 0 and hosted.returncode == 0, native.stderr + hosted.stderr
+    assert (tmp_path / "native.usda").read_bytes() == (tmp_path / "hosted.usda").read_bytes()
+    off = dress(tmp_path, bird, "--out", "off.usda", "--skeleton-flow", "off", *options)
+    assert off.returncode == 0 and (tmp_path / "off.usda").read_bytes() != (tmp_path / "native.usda").read_bytes()
+
+
+def test_pose_file_versions(host, tmp_path) -> None:
+    """Version 2 only when a layer map or a skeleton is written; version 1 files read as before."""
+    import struct
+
+    poses = host_poses(host, tmp_path, str(shared_model("Flamingo")), "--frames", "1", glb=False)
+    assert struct.unpack_from("<I", (tmp_path / "run.poses").read_bytes(), 8)[0] == 1 and poses.maps == {}
+    poses = host_poses(host, tmp_path, str(shared_model("bird")), "--frames", "2", "--layer-map", "TEXCOORD_0", glb=False)
+    data = (tmp_path / "run.poses").read_bytes()
+    assert struct.unpack_from("<I", data, 8)[0] == 2 and sorted(poses.maps) == ["layer", "skeleton"]
+    assert len(poses.frames) == 2 and poses.frames[1].shape == poses.rest.shape
+    from plumage.poses import PosesFormatError
+
+    (tmp_path / "cut.poses").write_bytes(data[:-4])
+    with pytest.raises(PosesFormatError, match="header announces"):
+        read_poses(tmp_path / "cut.poses")
+
+
 def test_usage_and_input_errors(tmp_path) -> None:
     fox = shared_model("Fox")
     cases = [
@@ -336,6 +429,9 @@ def test_usage_and_input_errors(tmp_path) -> None:
         ([str(fox), "--feathers", "10", "--spacing", "1"], 2, "not allowed with"),
         ([str(fox), "--bogus"], 2, "unrecognized arguments"),
         (["builtin", "--flow-map", "NORMAL"], 2, "the built-in model has none"),
+        (["builtin", "--layer-map", "NORMAL"], 2, "the built-in model has none"),
+        ([str(fox), "--layer-map", "_NOPE"], 2, "no vertex attribute _NOPE"),
+        ([str(fox), "--skeleton-flow", "maybe"], 2, "invalid choice"),
         ([str(tmp_path / "nope.glb")], 3, "nope.glb"),
     ]
     for args, code, message in cases:

@@ -17,6 +17,7 @@ from conftest import REPO
 STRUCTS = {
     "PlumageConfig": _ffi.Config,
     "PlumageMeshDesc": _ffi.MeshDesc,
+    "PlumageSkeleton": _ffi.Skeleton,
     "PlumageFeather": _ffi.Feather,
     "PlumageSamplingStats": _ffi.SamplingStats,
     "PlumageOrderingStats": _ffi.OrderingStats,

@@ -143,13 +143,18 @@ def dress_parser() -> argparse.ArgumentParser:
     c.add_argument("--flow", type=_vector, metavar="X,Y,Z", help="flow axis")
     c.add_argument("--flow-source", type=_vector, metavar="X,Y,Z",
                    help="feathers flow away from this point along the surface; with no --flow, --flow-source or "
-                   "--flow-map the source is the front-most rest vertex (glTF models face +Z)")
+                   "--flow-map, a skinned mesh's feathers follow its bones from the head down the trunk and each limb, "
+                   "other meshes flow from the front-most rest vertex (glTF models face +Z)")
+    c.add_argument("--skeleton-flow", choices=["on", "off"], default="on",
+                   help="off: a skinned mesh flows from its front-most rest vertex too (default on)")
     m = p.add_argument_group("per-vertex maps from vertex attributes of the glTF mesh (NAME or NAME:C, C = component 0-3)")
     m.add_argument("--spacing-map", type=_map, metavar="NAME[:C]", help="spacing multiplier: 2 = half as dense, 0 = bare skin")
     m.add_argument("--length-map", type=_map, metavar="NAME[:C]", help="feather length multiplier")
     m.add_argument("--width-map", type=_map, metavar="NAME[:C]", help="feather width multiplier")
     m.add_argument("--flow-map", type=_map, metavar="NAME[:C]",
                    help="flow direction from components C..C+2, in the mesh's own space (overrides --flow and --flow-source)")
+    m.add_argument("--layer-map", type=_map, metavar="NAME[:C]",
+                   help="per-vertex layer: where neighbouring feathers' layers differ, the higher lies on top")
     o = p.add_argument_group("output")
     o.add_argument("--up-axis", choices=["Y", "Z"], default="Y", help="stage up axis (glTF is Y-up)")
     o.add_argument("--quiet", action="store_true", help="no progress on stderr")
@@ -174,7 +179,7 @@ class DressInput:
     fps: float
     preset: str
     config: Dict[str, Any]  # keyword arguments of plumage.System
-    maps: Dict[str, np.ndarray]  # keyword arguments of plumage.System (those present)
+    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays, `skeleton` a gltf.SkinSkeleton
     warnings: List[str]
 
     def frames(self) -> Iterator[np.ndarray]:
@@ -184,10 +189,10 @@ class DressInput:
 
 def prepare(args: argparse.Namespace) -> DressInput:
     """Reads the input and builds the library's input as plumage_gltf does
-    (main.cpp: open_subject, make_config, default_flow_from_front, frame_times)."""
+    (main.cpp: open_subject, make_config, default_flow, frame_times)."""
     from .gltf import GltfUsageError, Scene, frame_times
 
-    maps_asked = [(k, getattr(args, k)) for k in ("spacing_map", "length_map", "width_map", "flow_map") if getattr(args, k)]
+    maps_asked = [(k, getattr(args, k)) for k in ("spacing_map", "length_map", "width_map", "flow_map", "layer_map") if getattr(args, k)]
     if args.input == "builtin":
         from .builtin import ProceduralBody
 
@@ -202,7 +207,7 @@ def prepare(args: argparse.Namespace) -> DressInput:
         subject = Scene(args.input, args.mesh, args.animation)
         facing = (0.0, 0.0, 1.0)
     maps: Dict[str, np.ndarray] = {}
-    for key, name in (("spacing_map", "spacing_scale"), ("length_map", "length_scale"), ("width_map", "width_scale")):
+    for key, name in (("spacing_map", "spacing_scale"), ("length_map", "length_scale"), ("width_map", "width_scale"), ("layer_map", "layer")):
         spec = getattr(args, key)
         if spec:
             maps[name] = subject.vertex_attribute(spec.attribute, spec.first, 1)
@@ -215,7 +220,13 @@ def prepare(args: argparse.Namespace) -> DressInput:
         if getattr(args, key) is not None:
             config[field] = getattr(args, key)
     rest = subject.rest_positions
-    if args.flow is None and args.flow_source is None and args.flow_map is None and len(rest):
+    skeleton = None
+    if args.flow is None and args.flow_source is None and args.flow_map is None and len(rest) and args.skeleton_flow == "on":
+        # a skinned subject's feathers follow its bones (the library walks them from the head)
+        skeleton = getattr(subject, "skin_skeleton", lambda: None)()
+    if skeleton is not None:
+        maps["skeleton"] = skeleton
+    elif args.flow is None and args.flow_source is None and args.flow_map is None and len(rest):
         # feathers flow from the front of the model to its back (float arithmetic, first of equals)
         f = np.array(facing, np.float32)
         ahead = rest[:, 0] * f[0] + rest[:, 1] * f[1] + rest[:, 2] * f[2]
@@ -331,7 +342,7 @@ def _host_args(args: argparse.Namespace) -> List[str]:
         out += ["--mesh", m]
     defaults = dress_parser().parse_args(["x", "--out", "x"])
     for key in ("animation", "fps", "start", "frames", "model_resolution", "preset", "feathers", "spacing", "seed", "mode", "threads",
-                "flow", "flow_source", "spacing_map", "length_map", "width_map", "flow_map"):
+                "flow", "flow_source", "skeleton_flow", "spacing_map", "length_map", "width_map", "flow_map", "layer_map"):
         value = getattr(args, key)
         if value is None or value == getattr(defaults, key):
             continue

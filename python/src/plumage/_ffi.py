@@ -91,6 +91,18 @@ NON_KEYWORD_FIELDS = (
 )
 
 
+class Skeleton(ctypes.Structure):
+    _fields_ = [
+        ("joint_count", c_uint32),
+        ("influences", c_uint32),
+        ("joint_positions", POINTER(c_float)),
+        ("joint_parents", POINTER(c_int32)),
+        ("vertex_joints", POINTER(c_uint32)),
+        ("vertex_weights", POINTER(c_float)),
+        ("head_joint", c_int32),
+    ]
+
+
 class MeshDesc(ctypes.Structure):
     _fields_ = [
         ("struct_size", c_uint32),
@@ -102,6 +114,8 @@ class MeshDesc(ctypes.Structure):
         ("spacing_scale", POINTER(c_float)),
         ("length_scale", POINTER(c_float)),
         ("width_scale", POINTER(c_float)),
+        ("skeleton", POINTER(Skeleton)),
+        ("layer", POINTER(c_float)),
     ]
 
 
@@ -132,6 +146,8 @@ class SamplingStats(ctypes.Structure):
         ("coverage_gap", c_float),
         ("alignment", c_float),
         ("seconds", ctypes.c_double),
+        ("field_singularities", c_uint32),
+        ("reserved", c_uint32),
     ]
 
 
@@ -203,6 +219,7 @@ class Validation(ctypes.Structure):
         ("bristle_percent", ctypes.c_double),
         ("stack_efficiency", ctypes.c_double),
         ("stack_depth_median", ctypes.c_double),
+        ("discord_percent", ctypes.c_double),
     ]
 
 

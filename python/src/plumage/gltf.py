@@ -533,6 +533,50 @@ class Skeleton:
     weights: npt.NDArray[np.float64]
 
 
+@dataclass(eq=False)
+class SkinSkeleton:
+    """The skeleton as plumage_gltf hands it to the library (animated_mesh.h
+    SkinSkeleton, PlumageSkeleton), usable as `plumage.System(skeleton=...)`.
+
+    joint_positions: (J, 3) float32, each joint's rest world position (the
+        float cast of its global transform's translation)
+    joint_parents: (J,) int32, the nearest ancestor joint, -1 for a root
+    vertex_joints, vertex_weights: (n, k) uint32 and float32: per vertex its
+        influences of weight > 0 from every JOINTS_n/WEIGHTS_n set in order,
+        each weight / their sum (in double, then cast), packed first and
+        padded with (joint 0, weight 0) up to the widest vertex's count
+        (at most 16)
+    head_joint: -1 (the library picks the head)
+    """
+
+    joint_positions: npt.NDArray[np.float32]
+    joint_parents: npt.NDArray[np.int32]
+    vertex_joints: npt.NDArray[np.uint32]
+    vertex_weights: npt.NDArray[np.float32]
+    head_joint: int = -1
+
+    @property
+    def influences(self) -> int:
+        return int(self.vertex_joints.shape[1])
+
+    def append(self, other: "SkinSkeleton") -> "SkinSkeleton":
+        """`other`'s joints after these and its vertices after these (SkinSkeleton::append)."""
+        width = max(self.influences, other.influences)
+        offset = len(self.joint_parents)
+
+        def widen(s: SkinSkeleton, shift: int) -> Tuple[np.ndarray, np.ndarray]:
+            pad = ((0, 0), (0, width - s.influences))
+            return np.pad(s.vertex_joints + np.uint32(shift), pad), np.pad(s.vertex_weights, pad)
+
+        (j0, w0), (j1, w1) = widen(self, 0), widen(other, offset)
+        parents = np.where(other.joint_parents < 0, -1, other.joint_parents + offset).astype(np.int32)
+        return SkinSkeleton(np.concatenate([self.joint_positions, other.joint_positions]), np.concatenate([self.joint_parents, parents]),
+                            np.concatenate([j0, j1]), np.concatenate([w0, w1]))
+
+
+MAX_INFLUENCES = 16
+
+
 class MeshScene:
     """Mesh `mesh_index` of `f`, evaluated at any time of the clip named or
     numbered `clip_request` (else clip 0 when there is one): gltf_scene.cpp's
@@ -868,6 +912,30 @@ class MeshScene:
         return Skeleton(np.array(self.joints, np.int64), np.array(parents, np.int64), rest, np.concatenate(joints), np.concatenate(weights))
 
 
+    def skin_skeleton(self) -> Optional[SkinSkeleton]:
+        """The skeleton plumage_gltf hands the library for this mesh (GltfScene::skeleton()), None without a skin."""
+        if not self.skinned:
+            return None
+        glob = self._global_transforms(self.nodes)
+        index = {node: k for k, node in enumerate(self.joints)}
+        parents = []
+        for node in self.joints:
+            up = self.parent[node]
+            while up >= 0 and up not in index:
+                up = self.parent[up]
+            parents.append(index[up] if up >= 0 else -1)
+        positions = np.array([[glob[j][12], glob[j][13], glob[j][14]] for j in self.joints], np.float64).astype(np.float32)
+        used = self.influence_joint >= 0
+        order = np.argsort(~used, axis=1, kind="stable")  # the used slots first, in slot order
+        joints = np.take_along_axis(self.influence_joint, order, axis=1)
+        weights = np.take_along_axis(self.influence_weight, order, axis=1)
+        width = min(max(1, int(used.sum(axis=1).max()) if len(used) else 1), MAX_INFLUENCES)
+        joints, weights = joints[:, :width], weights[:, :width]
+        keep = joints >= 0
+        return SkinSkeleton(positions, np.array(parents, np.int32), np.where(keep, joints, 0).astype(np.uint32),
+                            np.where(keep, weights, 0.0).astype(np.float32))
+
+
 def _triangle_list(mode: int, v: np.ndarray, what: str) -> np.ndarray:
     """Strips and fans as plain triangle lists (glTF 2.0, 3.7.2.1)."""
     if mode not in (_STRIP, _FAN):
@@ -914,6 +982,16 @@ class Scene:
 
     def rest_directions(self, name: str, first: int = 0) -> npt.NDArray[np.float32]:
         return np.concatenate([p.rest_directions(name, first) for p in self.parts])
+
+    def skin_skeleton(self) -> Optional[SkinSkeleton]:
+        """Every mesh's skeleton one after the other (MeshUnion::skeleton); None unless every mesh is skinned."""
+        out: Optional[SkinSkeleton] = None
+        for part in self.parts:
+            s = part.skin_skeleton()
+            if s is None:
+                return None
+            out = s if out is None else out.append(s)
+        return out
 
     def frame_times(self, fps: float = 30.0, start: float = 0.0, frames: Optional[int] = None) -> npt.NDArray[np.float64]:
         return frame_times(self.clip, fps, start, frames)

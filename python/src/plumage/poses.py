@@ -1,7 +1,7 @@
 """Reads the file `plumage_gltf --poses FILE` writes: what the C++ glTF host
 handed the library (rest mesh, configuration, per-vertex maps, and every
-stepped frame's positions), so that Python drives the library with exactly
-the same input. The layout is documented in cpp_examples/gltf_host/pose_writer.h.
+stepped frame's positions; from version 2 also the layer map and the
+skeleton), so that Python drives the library with exactly the same input. The layout is documented in cpp_examples/gltf_host/pose_writer.h.
 """
 
 from __future__ import annotations
@@ -16,9 +16,12 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _ffi
+from .system import Skeleton
 
 MAGIC = b"PLMPOSE\0"
 _HEAD = struct.Struct("<8sII3QdII")
+_SKELETON_HEAD = struct.Struct("<IIiI")  # joint_count, influences, head_joint, reserved (version 2)
+_SKELETON_BIT = 1 << 5
 
 
 class PosesFormatError(ValueError):
@@ -33,7 +36,7 @@ class Poses:
     frames: npt.NDArray[np.float32]  # (frames, n, 3)
     fps: float
     config: Dict[str, Any]  # keyword arguments of plumage.System
-    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays
+    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays, `skeleton` a plumage.Skeleton
 
 
 def config_from_struct(raw: _ffi.Config) -> Dict[str, Any]:
@@ -55,13 +58,22 @@ def read_poses(path: Union[str, Path]) -> Poses:
     magic, version, config_size, nv, nt, nf, fps, mask, _ = _HEAD.unpack_from(data, 0)
     if magic != MAGIC:
         raise PosesFormatError(f"{path}: not a pose file (written by plumage_gltf --poses)")
-    if version != 1:
-        raise PosesFormatError(f"{path}: pose file version {version}; this package reads version 1")
+    if version not in (1, 2):
+        raise PosesFormatError(f"{path}: pose file version {version}; this package reads versions 1 and 2")
+    if version == 1 and mask >> 4:
+        raise PosesFormatError(f"{path}: version 1 with map bits {mask:#x} (layer and skeleton came with version 2)")
     if config_size != ctypes.sizeof(_ffi.Config):
         raise PosesFormatError(f"{path}: PlumageConfig of {config_size} bytes; this package's has {ctypes.sizeof(_ffi.Config)}")
-    map_sizes = [("spacing_scale", nv), ("length_scale", nv), ("width_scale", nv), ("orientations", 3 * nv)]
+    map_sizes = [("spacing_scale", nv), ("length_scale", nv), ("width_scale", nv), ("orientations", 3 * nv), ("layer", nv)]
     expected = _HEAD.size + config_size + 12 * nv + 12 * nt + 8 * nf + 12 * nv * nf
     expected += sum(4 * size for bit, (_, size) in enumerate(map_sizes) if mask >> bit & 1)
+    joints = influences = head_joint = 0
+    if mask & _SKELETON_BIT:
+        at = expected - 12 * nv * nf  # the skeleton block sits before the frames
+        if len(data) < at + _SKELETON_HEAD.size:
+            raise PosesFormatError(f"{path}: too short for its skeleton")
+        joints, influences, head_joint, _ = _SKELETON_HEAD.unpack_from(data, at)
+        expected += _SKELETON_HEAD.size + 16 * joints + 8 * influences * nv
     if len(data) != expected:
         raise PosesFormatError(f"{path}: {len(data)} bytes where its header announces {expected}")
     offset = _HEAD.size
@@ -82,5 +94,12 @@ def read_poses(path: Union[str, Path]) -> Poses:
         if mask >> bit & 1:
             values = take("<f4", size)
             maps[name] = values.reshape(-1, 3) if name == "orientations" else values
+    if mask & _SKELETON_BIT:
+        offset += _SKELETON_HEAD.size
+        positions = take("<f4", 3 * joints).reshape(-1, 3)
+        parents = take("<i4", joints)
+        vertex_joints = take("<u4", influences * nv).reshape(nv, influences)
+        vertex_weights = take("<f4", influences * nv).reshape(nv, influences)
+        maps["skeleton"] = Skeleton(positions, parents, vertex_joints, vertex_weights, head_joint)
     frames = take("<f4", 3 * nv * nf).reshape(nf, nv, 3)
     return Poses(rest=rest, triangles=triangles, times=times, frames=frames, fps=fps, config=config_from_struct(raw), maps=maps)

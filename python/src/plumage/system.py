@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass, fields
-from typing import Any, Callable, Dict, Optional, Tuple, Type, TypeVar
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Type, TypeVar, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -79,6 +79,101 @@ def _index_array(value: ArrayLike, name: str) -> UIntArray:
     return np.ascontiguousarray(arr, dtype=np.uint32)
 
 
+def _integer_array(value: ArrayLike, name: str, low: int, high: int) -> np.ndarray:
+    """An integer array with every value in [low, high] (else INDEX_OUT_OF_RANGE)."""
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: not an integer array ({e})") from None
+    if arr.size == 0:
+        arr = arr.astype(np.int64)
+    if arr.dtype.kind not in "iu":
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: expected integers, got dtype {arr.dtype}")
+    if arr.size and (int(arr.min()) < low or int(arr.max()) > high):
+        bad = int(arr.min()) if int(arr.min()) < low else int(arr.max())
+        raise PlumageError(_ffi.STATUS_INDEX_OUT_OF_RANGE, f"{name}: {bad} is out of range [{low}, {high}]")
+    return arr
+
+
+@dataclass(eq=False)
+class Skeleton:
+    """The skeleton a mesh is skinned to (PlumageSkeleton), for `System(skeleton=...)`.
+
+    joint_positions: (J, 3) joint positions at the rest pose, in the space of
+    the mesh's vertices; joint_parents: (J,) each joint's parent, -1 for a
+    root; vertex_joints: (n, k) the joints each vertex is weighted to (k = 1
+    to 16 influences); vertex_weights: (n, k) their weights (finite, >= 0;
+    unused slots weight 0); head_joint: the joint the flow starts from (the
+    tip of the head or the beak), or -1: the end joint farthest against
+    `flow_axis` when that is set, else farthest up and forward (+Y plus +Z).
+    Without `orientations` or `flow_source`, feathers then run from the head
+    down the trunk and out along every limb. A dict with these keys (or any
+    object with these attributes, such as plumage.gltf.SkinSkeleton) is
+    taken too.
+    """
+
+    joint_positions: ArrayLike
+    joint_parents: ArrayLike
+    vertex_joints: ArrayLike
+    vertex_weights: ArrayLike
+    head_joint: int = -1
+
+
+SKELETON_FIELDS = ("joint_positions", "joint_parents", "vertex_joints", "vertex_weights", "head_joint")
+MAX_INFLUENCES = 16
+
+
+def _skeleton_struct(value: Union[Skeleton, Mapping[str, Any]], n: int) -> Tuple[_ffi.Skeleton, List[np.ndarray]]:
+    """The PlumageSkeleton of `value` for a mesh of `n` vertices, and the arrays it points into (kept alive by the caller)."""
+    if isinstance(value, Skeleton) or (not isinstance(value, Mapping) and all(hasattr(value, k) for k in SKELETON_FIELDS[:4])):
+        parts = {name: getattr(value, name, -1) for name in SKELETON_FIELDS}  # also plumage.gltf.SkinSkeleton
+    elif isinstance(value, Mapping):
+        unknown = sorted(set(value) - set(SKELETON_FIELDS))
+        missing = [k for k in SKELETON_FIELDS[:4] if k not in value]
+        if unknown or missing:
+            what = f"unknown key {unknown[0]!r}" if unknown else f"no {missing[0]!r}"
+            raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"skeleton: {what} (keys: {', '.join(SKELETON_FIELDS)}; head_joint optional)")
+        parts = {"head_joint": -1, **value}
+    else:
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"skeleton: expected a plumage.Skeleton or a dict, got {type(value).__name__}")
+    positions = _float_array(parts["joint_positions"], "skeleton.joint_positions", 3)
+    joints = positions.shape[0]
+    if not 1 <= joints <= 1 << 16:
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"skeleton.joint_positions: {joints} joints; it must have 1 to {1 << 16}")
+    parents = _integer_array(parts["joint_parents"], "skeleton.joint_parents", -1, joints - 1)
+    if parents.shape != (joints,):
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"skeleton.joint_parents: expected shape ({joints},) (one per joint), got {parents.shape}")
+    vj = _integer_array(parts["vertex_joints"], "skeleton.vertex_joints", 0, joints - 1)
+    if vj.ndim == 1:
+        vj = vj.reshape(-1, 1)
+    if vj.ndim != 2 or vj.shape[0] != n:
+        raise PlumageError(_ffi.STATUS_INVALID_MESH, f"skeleton.vertex_joints: expected shape ({n}, k) (k joints per vertex), got {vj.shape}")
+    k = vj.shape[1]
+    if not 1 <= k <= MAX_INFLUENCES:
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"skeleton.vertex_joints: {k} influences per vertex; it must be 1 to {MAX_INFLUENCES}")
+    weights = parts["vertex_weights"]
+    if k == 1 and np.ndim(weights) == 2 and np.shape(weights)[1] == 1:
+        weights = np.reshape(weights, -1)
+    vw = _float_array(weights, "skeleton.vertex_weights", k).reshape(-1, k)
+    if vw.shape != vj.shape:
+        raise PlumageError(_ffi.STATUS_INVALID_MESH, f"skeleton.vertex_weights: expected shape {vj.shape} (as vertex_joints), got {vw.shape}")
+    head = parts["head_joint"]
+    if isinstance(head, bool) or not isinstance(head, (int, np.integer)) or not -1 <= int(head) < joints:
+        raise PlumageError(_ffi.STATUS_INDEX_OUT_OF_RANGE, f"skeleton.head_joint: expected -1 or a joint index below {joints}, got {head!r}")
+    weights_c: FloatArray = np.ascontiguousarray(vw, dtype=np.float32)
+    parents_c, joints_c = np.ascontiguousarray(parents, dtype=np.int32), np.ascontiguousarray(vj, dtype=np.uint32)
+    arrays: List[np.ndarray] = [positions, parents_c, joints_c, weights_c]
+    raw = _ffi.Skeleton()
+    raw.joint_count = joints
+    raw.influences = k
+    raw.joint_positions = _fptr(positions)
+    raw.joint_parents = parents_c.ctypes.data_as(ctypes.POINTER(ctypes.c_int32))
+    raw.vertex_joints = joints_c.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32))
+    raw.vertex_weights = _fptr(weights_c)
+    raw.head_joint = int(head)
+    return raw, arrays
+
+
 def _fptr(arr: Optional[FloatArray]) -> Any:
     return None if arr is None else arr.ctypes.data_as(ctypes.POINTER(ctypes.c_float))
 
@@ -126,6 +221,7 @@ class Validation:
     bristle_percent: float
     stack_efficiency: float
     stack_depth_median: float
+    discord_percent: float  # feathers turned > 45 degrees from their 8 nearest neighbours' mean heading
 
 
 @dataclass(frozen=True)
@@ -136,6 +232,7 @@ class SamplingStats:
     coverage_gap: float
     alignment: float
     seconds: float
+    field_singularities: int  # faces the rest orientation field turns round (sources, sinks, whorls, saddles)
 
 
 @dataclass(frozen=True)
@@ -313,7 +410,11 @@ class System:
     vertices: (n, 3) positions; triangles: (m, 3) vertex indices (a glTF
     triangle soup is fine). Optional per-vertex maps: `orientations` (n, 3)
     flow directions, `spacing_scale`, `length_scale`, `width_scale` (n,)
-    multipliers. Keyword configuration: any `PlumageConfig` field
+    multipliers, `layer` (n,) painted layers (where neighbouring feathers'
+    layers differ, the higher lies on top), and `skeleton` (a `Skeleton` or
+    a dict of its fields: joints at rest and skin weights; without
+    `orientations` or `flow_source` the feathers then follow the bones from
+    the head down the trunk and every limb). Keyword configuration: any `PlumageConfig` field
     (`target_feathers=`, `seed=`, `threads=`, `mode="incremental"|"legacy"|"rebuild"`,
     `sampler="guided"|"random"`, `flow_axis=(x, y, z)`, `flow_source=(x, y, z)`, ...),
     see `default_config()`. The default feathers have bent shafts that lie down over
@@ -332,6 +433,8 @@ class System:
         spacing_scale: Optional[ArrayLike] = None,
         length_scale: Optional[ArrayLike] = None,
         width_scale: Optional[ArrayLike] = None,
+        layer: Optional[ArrayLike] = None,
+        skeleton: Optional[Union[Skeleton, Mapping[str, Any]]] = None,
         progress: Optional[ProgressCallback] = None,
         preset: str = "feathers",
         **config: Any,
@@ -347,6 +450,7 @@ class System:
             ("spacing_scale", spacing_scale, 1),
             ("length_scale", length_scale, 1),
             ("width_scale", width_scale, 1),
+            ("layer", layer, 1),
         ):
             if value is None:
                 maps[name] = None
@@ -369,6 +473,11 @@ class System:
         desc.spacing_scale = _fptr(maps["spacing_scale"])
         desc.length_scale = _fptr(maps["length_scale"])
         desc.width_scale = _fptr(maps["width_scale"])
+        desc.layer = _fptr(maps["layer"])
+        skeleton_raw = None
+        if skeleton is not None:
+            skeleton_raw, skeleton_arrays = _skeleton_struct(skeleton, n)
+            desc.skeleton = ctypes.pointer(skeleton_raw)
         out = ctypes.c_void_p()
         status = lib.plumage_system_create(ctypes.byref(cfg), ctypes.byref(desc), ctypes.byref(out))
         _check(status, None, "plumage_system_create")
