@@ -18,6 +18,7 @@ STRUCTS = {
     "PlumageConfig": _ffi.Config,
     "PlumageMeshDesc": _ffi.MeshDesc,
     "PlumageSkeleton": _ffi.Skeleton,
+    "PlumageFeatherType": _ffi.FeatherType,
     "PlumageFeather": _ffi.Feather,
     "PlumageSamplingStats": _ffi.SamplingStats,
     "PlumageOrderingStats": _ffi.OrderingStats,

@@ -72,8 +72,6 @@ def test_layers() -> None:
         assert r.intersecting_pairs == 0 and r.body_penetrations == 0
 
 
-@pytest.mark.xfail(strict=True, reason="library: a uniform layer of 3.0 blended at the roots (3*b0 + 3*b1 + 3*b2) is not "
-                   "exactly 3.0 everywhere, so src/system/mod.rs keeps it as layers and the order changes")
 def test_any_uniform_layer_orders_nothing() -> None:
     v, t = uv_sphere()
     with plumage.System(v, t, target_feathers=600, seed=4, threads=1) as s:
@@ -122,3 +120,23 @@ def test_bad_skeletons_and_layers_are_refused() -> None:
     # one influence per vertex may be given flat
     with plumage.System(v, t, target_feathers=100, skeleton={**good, "vertex_joints": np.zeros(n, int), "vertex_weights": np.ones(n)}) as s:
         assert s.feather_count > 50
+
+
+def test_a_type_map_gives_scales_where_it_says() -> None:
+    v, t = uv_sphere()
+    kinds = (np.asarray(v)[:, 2] < 0).astype(np.uint32)  # scales on the lower half
+    with plumage.System(v, t, feather_type=kinds, target_feathers=600, seed=4, threads=1) as s:
+        f = s.feathers()
+        placed = f["length"] > 0
+        ratio = f["width"][placed] / f["length"][placed]
+        lower = f["root"][placed][:, 2] < -0.2
+        upper = f["root"][placed][:, 2] > 0.2
+        assert abs(np.median(ratio[lower]) - 1.0) < 0.1 and abs(np.median(ratio[upper]) - 1.75 / 4) < 0.05
+        v_ = s.validate()
+        assert v_.intersecting_pairs == 0 and v_.body_penetrations == 0
+    with pytest.raises(PlumageError) as info:
+        plumage.System(v, t, feather_type=kinds, feather_types=("feathers", "gills"))
+    assert info.value.status_name == "INVALID_ARGUMENT"
+    with pytest.raises(PlumageError) as info:
+        plumage.System(v, t, feather_type=kinds + 5)
+    assert info.value.status_name == "INDEX_OUT_OF_RANGE"

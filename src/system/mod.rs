@@ -121,13 +121,10 @@ impl System {
         if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
             dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
         }
-        if let Some(layer) = attribute(mesh.layer, 1) {
-            let layers: Vec<f32> =
+        // One layer everywhere orders nothing: kept as no layers at all.
+        if let Some(layer) = attribute(mesh.layer, 1).filter(|l| l.iter().any(|&v| v != l[0])) {
+            dressing.layers =
                 dressing.roots.iter().map(|r| crate::field::blend_at(&layer, &dressing.surface, r.point)).collect();
-            // One layer everywhere orders nothing: kept as no layers at all.
-            if layers.iter().any(|&l| l != layers[0]) {
-                dressing.layers = layers;
-            }
         }
         if let Some(map) = mesh.feather_types {
             // Indices below 256 are exact as floats, so they weld as floats.

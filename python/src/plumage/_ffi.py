@@ -103,6 +103,14 @@ class Skeleton(ctypes.Structure):
     ]
 
 
+class FeatherType(ctypes.Structure):
+    _fields_ = [
+        ("length_per_spacing", c_float),
+        ("width_per_spacing", c_float),
+        ("thickness_scale", c_float),
+    ]
+
+
 class MeshDesc(ctypes.Structure):
     _fields_ = [
         ("struct_size", c_uint32),
@@ -116,6 +124,9 @@ class MeshDesc(ctypes.Structure):
         ("width_scale", POINTER(c_float)),
         ("skeleton", POINTER(Skeleton)),
         ("layer", POINTER(c_float)),
+        ("feather_type", POINTER(c_uint32)),
+        ("feather_types", POINTER(FeatherType)),
+        ("feather_type_count", c_uint32),
     ]
 
 
@@ -302,6 +313,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         "plumage_config_init": (None, [POINTER(Config)]),
         "plumage_config_init_preset": (c_uint32, [POINTER(Config), c_uint32]),
         "plumage_mesh_desc_init": (None, [POINTER(MeshDesc)]),
+        "plumage_feather_type_init": (c_uint32, [POINTER(FeatherType), c_uint32]),
         "plumage_system_create": (c_uint32, [POINTER(Config), POINTER(MeshDesc), POINTER(c_void_p)]),
         "plumage_system_destroy": (c_uint32, [sys_p]),
         "plumage_system_step": (c_uint32, [sys_p, f_p, c_size_t]),

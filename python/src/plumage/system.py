@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass, fields
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Type, TypeVar, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Type, TypeVar, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -411,7 +411,10 @@ class System:
     triangle soup is fine). Optional per-vertex maps: `orientations` (n, 3)
     flow directions, `spacing_scale`, `length_scale`, `width_scale` (n,)
     multipliers, `layer` (n,) painted layers (where neighbouring feathers'
-    layers differ, the higher lies on top), and `skeleton` (a `Skeleton` or
+    layers differ, the higher lies on top), `feather_type` (n,) an index per
+    vertex into `feather_types` (preset names, default ("feathers",
+    "scales"): each feather takes its root's nearest corner's type), and
+    `skeleton` (a `Skeleton` or
     a dict of its fields: joints at rest and skin weights; without
     `orientations` or `flow_source` the feathers then follow the bones from
     the head down the trunk and every limb). Keyword configuration: any `PlumageConfig` field
@@ -435,6 +438,8 @@ class System:
         width_scale: Optional[ArrayLike] = None,
         layer: Optional[ArrayLike] = None,
         skeleton: Optional[Union[Skeleton, Mapping[str, Any]]] = None,
+        feather_type: Optional[ArrayLike] = None,
+        feather_types: Sequence[str] = ("feathers", "scales"),
         progress: Optional[ProgressCallback] = None,
         preset: str = "feathers",
         **config: Any,
@@ -478,6 +483,19 @@ class System:
         if skeleton is not None:
             skeleton_raw, skeleton_arrays = _skeleton_struct(skeleton, n)
             desc.skeleton = ctypes.pointer(skeleton_raw)
+        if feather_type is not None:
+            table = (_ffi.FeatherType * max(len(feather_types), 1))()
+            for k, name in enumerate(feather_types):
+                if name not in _ffi.PRESETS:
+                    raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"feather_types[{k}] {name!r}: expected one of {', '.join(_ffi.PRESETS)}")
+                _check(lib.plumage_feather_type_init(ctypes.byref(table[k]), _ffi.PRESETS[name]), None, "plumage_feather_type_init")
+            kinds = _integer_array(feather_type, "feather_type", 0, max(len(feather_types) - 1, 0)).astype(np.uint32).reshape(-1)
+            if kinds.shape[0] != n:
+                raise PlumageError(_ffi.STATUS_INVALID_MESH, f"feather_type: {kinds.shape[0]} values for {n} vertices")
+            kinds = np.ascontiguousarray(kinds)
+            desc.feather_type = kinds.ctypes.data_as(ctypes.POINTER(ctypes.c_uint32))
+            desc.feather_types = table
+            desc.feather_type_count = len(feather_types)
         out = ctypes.c_void_p()
         status = lib.plumage_system_create(ctypes.byref(cfg), ctypes.byref(desc), ctypes.byref(out))
         _check(status, None, "plumage_system_create")
