@@ -657,7 +657,6 @@ def on_frame_change(scene: bpy.types.Scene, depsgraph: Optional[bpy.types.Depsgr
 @persistent
 def on_undo_redo(*_args: Any) -> None:
     """bpy.app.handlers.undo_post / redo_post: the live systems follow the file's state."""
-    global _REPLAYING
     if plumage is None or not (_RUNS or _PARKED):
         return
     changed = sync_runs()

@@ -432,6 +432,13 @@ def test_usage_and_input_errors(tmp_path) -> None:
         (["builtin", "--layer-map", "NORMAL"], 2, "the built-in model has none"),
         ([str(fox), "--layer-map", "_NOPE"], 2, "no vertex attribute _NOPE"),
         ([str(fox), "--skeleton-flow", "maybe"], 2, "invalid choice"),
+        ([str(fox), "--type-map", "_NOPE"], 2, "no vertex attribute _NOPE"),
+        (["builtin", "--type-map", "NORMAL"], 2, "the built-in model has none"),
+        ([str(fox), "--feather-types", "feathers,fur"], 2, "feathers|sleek|kite|scales"),
+        ([str(fox), "--validate", "sometimes"], 2, "invalid choice"),
+        ([str(fox), "--theta", "nan"], 2, "finite number"),
+        ([str(fox), "--memory-limit", "-1"], 2, "integer from 0"),
+        ([str(fox), "--fluffiness", "-4", "--frames", "1"], 4, "fluffiness"),  # the library's refusal, as the host's
         ([str(tmp_path / "nope.glb")], 3, "nope.glb"),
     ]
     for args, code, message in cases:
