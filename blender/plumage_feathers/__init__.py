@@ -25,6 +25,7 @@ bl_info = {
 
 import json
 import os
+import uuid
 from typing import Any, Dict, List, Optional, Tuple
 
 import bpy
@@ -57,8 +58,19 @@ def _package_missing(cls: Any) -> bool:
 
 
 # dressed object (an armature or a mesh) name -> live state: the System,
-# its last frame, the dressed frame, the feathers object, the source meshes
+# its last frame, the dressed frame, the feathers object, the source meshes,
+# and the token of the Dress that made it (also kept on the object as
+# RUN_PROPERTY, so that an undo that takes the object back to before that
+# Dress shows: the object's token is no longer the run's)
 _RUNS: Dict[str, Dict[str, Any]] = {}
+
+# runs an undo (or redo) took out of the file, by token: a redo (or undo)
+# that brings their token back makes them live again; at most PARKED_MAX
+# are kept (the oldest closed first)
+_PARKED: Dict[str, Dict[str, Any]] = {}
+PARKED_MAX = 2
+RUN_PROPERTY = "plumage_run"
+VALIDATION_PROPERTY = "plumage_validation"
 
 # Frames between two kept states of a dressed object: a jump replays at
 # most this many frames.
@@ -76,10 +88,23 @@ def is_feathers(obj: bpy.types.Object) -> bool:
     return bool(obj.get("plumage_feathers_of"))
 
 
+def is_hidden(obj: bpy.types.Object) -> bool:
+    """Hidden in the viewport (the object's own switch, or hidden in the view
+    layer, or not in the view layer at all)."""
+    if obj.hide_viewport:
+        return True
+    try:
+        return bool(obj.hide_get())
+    except RuntimeError:  # not in the view layer: not shown either
+        return True
+
+
 def dress_sources(context: bpy.types.Context, obj: bpy.types.Object) -> List[bpy.types.Object]:
     """The meshes one coat covers, in name order: for an armature every mesh
     its Armature modifiers name and every mesh below it in the hierarchy
-    (parented to a bone or not); for a mesh the selected meshes and it."""
+    (parented to a bone or not); for a mesh the selected meshes and it.
+    Hidden meshes (hide_viewport, or hidden in the view layer) are left out,
+    except the active mesh itself."""
     if obj.type == "ARMATURE":
         found = {o for o in obj.children_recursive if o.type == "MESH"}
         for o in context.scene.objects:
@@ -87,7 +112,7 @@ def dress_sources(context: bpy.types.Context, obj: bpy.types.Object) -> List[bpy
                 found.add(o)
     else:
         found = {o for o in context.selected_objects if o.type == "MESH"} | {obj}
-    return sorted((o for o in found if not is_feathers(o)), key=lambda o: o.name)
+    return sorted((o for o in found if not is_feathers(o) and (o is obj or not is_hidden(o))), key=lambda o: o.name)
 
 
 def world_arrays(
@@ -254,16 +279,16 @@ def front_source(positions: np.ndarray) -> Tuple[float, float, float]:
     return tuple(float(x) for x in positions[int(np.argmax(-positions[:, 1]))])  # type: ignore[return-value]
 
 
-def layer_map(sources: List[bpy.types.Object], counts: List[int], group: str) -> Optional[np.ndarray]:
+def layer_map(sources: List[bpy.types.Object], counts: List[int], group: str, field: str = "Layer group") -> Optional[np.ndarray]:
     """Per vertex its weight in the vertex group `group` (0 outside it or on a mesh without it): the painted layer."""
     if not group:
         return None
     if not any(group in src.vertex_groups for src in sources):
-        raise ValueError(f"no dressed mesh has a vertex group {group!r} (Layer group)")
+        raise ValueError(f"no dressed mesh has a vertex group {group!r} ({field})")
     parts = []
     for src, n in zip(sources, counts):
         if len(src.data.vertices) != n:
-            raise ValueError(f"{src.name!r}: the modifiers change the vertex count ({len(src.data.vertices)} -> {n}): the layer group cannot be read")
+            raise ValueError(f"{src.name!r}: the modifiers change the vertex count ({len(src.data.vertices)} -> {n}): the {field.lower()} cannot be read")
         values = np.zeros(n, np.float32)
         g = src.vertex_groups.get(group)
         if g is not None:
@@ -273,6 +298,18 @@ def layer_map(sources: List[bpy.types.Object], counts: List[int], group: str) ->
                         values[v.index] = e.weight
         parts.append(values)
     return np.concatenate(parts)
+
+
+# the types a Type group chooses between: weight < 0.5 feathers, >= 0.5 scales
+TYPE_GROUP_TYPES = ("feathers", "scales")
+
+
+def type_map(sources: List[bpy.types.Object], counts: List[int], group: str) -> Optional[np.ndarray]:
+    """Per vertex the feather type the vertex group `group` paints: 0
+    (feathers) where its weight is below 0.5 (or outside it), 1 (scales) where
+    it is 0.5 or more; an index into TYPE_GROUP_TYPES."""
+    weights = layer_map(sources, counts, group, "Type group")
+    return None if weights is None else (weights >= 0.5).astype(np.uint32)
 
 
 def system_config(props: "PlumageSettings") -> Dict[str, Any]:
@@ -320,6 +357,7 @@ def dress_inputs(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str,
             parts.append(part)
         maps[key] = np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
     maps["layer"] = layer_map(sources, counts, props.layer_group)
+    maps["feather_type"] = type_map(sources, counts, props.type_group)
     config = system_config(props)
     # the flow: the armature's bones unless another is chosen; without a
     # bound armature, away from the front-most vertex
@@ -339,6 +377,8 @@ def make_system(inputs: Dict[str, Any], progress: Any = None) -> Any:
     maps = {k: v for k, v in inputs["maps"].items() if v is not None}
     if inputs.get("skeleton") is not None:
         maps["skeleton"] = inputs["skeleton"]
+    if "feather_type" in maps:
+        maps["feather_types"] = TYPE_GROUP_TYPES
     return plumage.System(inputs["positions"], inputs["triangles"], progress=progress, **maps, **inputs["config"])
 
 
@@ -468,13 +508,71 @@ def install_run(context: bpy.types.Context, obj: bpy.types.Object, system: Any, 
     obj.plumage.use_cache = False
     write_feather_mesh(target, system.feather_geometry(), topology=True, roots=system.feathers()["root"])
     obj.plumage.sources = "\n".join(inputs["sources"])
+    token = uuid.uuid4().hex
+    obj[RUN_PROPERTY] = token
     run = {"system": system, "frame": inputs["frame"], "start": inputs["frame"], "target": target.name, "sources": list(inputs["sources"]),
-           "counts": list(inputs["counts"]), "inputs": inputs}
+           "counts": list(inputs["counts"]), "inputs": inputs, "token": token, "object": obj.name}
     old = _RUNS.pop(obj.name, None)
     if old and old["system"] is not system:
-        old["system"].close()
+        park(old)  # an undo of this Dress brings it back
     _RUNS[obj.name] = run
+    record_validation(obj, run)
     return run
+
+
+def record_validation(obj: bpy.types.Object, run: Dict[str, Any]) -> Optional[Dict[str, Any]]:
+    """Validates the live system at its frame and keeps the figures the panel
+    shows on the object (saved with the file)."""
+    v = run["system"].validate()
+    if v is None:
+        return None
+    figures = {"frame": int(run["frame"]), "pairs": int(v.intersecting_pairs), "penetrations": int(v.body_penetrations),
+               "coverage": float(v.coverage), "discord_percent": float(v.discord_percent)}
+    obj[VALIDATION_PROPERTY] = figures
+    return figures
+
+
+def validation_text(obj: bpy.types.Object) -> List[str]:
+    """The panel's lines for the last validation of `obj`'s coat (none yet: no lines)."""
+    v = obj.get(VALIDATION_PROPERTY)
+    if v is None:
+        return []
+    return [f"Validated at frame {v['frame']}: {v['pairs']} pairs, {v['penetrations']} penetrations",
+            f"coverage {v['coverage']:.3f}, discord {v['discord_percent']:.1f}%"]
+
+
+def park(run: Dict[str, Any]) -> None:
+    """Takes a run out of the live ones and keeps it (closed when more than PARKED_MAX are kept)."""
+    _PARKED[run["token"]] = run
+    while len(_PARKED) > PARKED_MAX:
+        oldest = next(iter(_PARKED))
+        _PARKED.pop(oldest)["system"].close()
+
+
+def sync_runs() -> List[str]:
+    """After an undo or redo: a live run whose object no longer carries its
+    token (the Dress that made it was undone) is dropped from the live ones
+    (parked for a redo); a parked run whose token the object carries again
+    is live again, its feathers brought to the scene's frame. Returns what
+    changed, for messages and tests."""
+    changed = []
+    names = set(_RUNS) | {r["object"] for r in _PARKED.values()}
+    for name in sorted(names):
+        obj = bpy.data.objects.get(name)
+        token = obj.get(RUN_PROPERTY) if obj is not None else None
+        live = _RUNS.get(name)
+        if live is not None and live["token"] != token:
+            park(_RUNS.pop(name))
+            changed.append(f"dropped {name}")
+        if name not in _RUNS and token is not None and token in _PARKED:
+            run = _PARKED.pop(token)
+            target = bpy.data.objects.get(run["target"])
+            if target is None:
+                run["system"].close()
+                continue
+            _RUNS[name] = run
+            changed.append(f"restored {name}")
+    return changed
 
 
 def create_run(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]:
@@ -557,14 +655,37 @@ def on_frame_change(scene: bpy.types.Scene, depsgraph: Optional[bpy.types.Depsgr
 
 
 @persistent
+def on_undo_redo(*_args: Any) -> None:
+    """bpy.app.handlers.undo_post / redo_post: the live systems follow the file's state."""
+    if plumage is None or not (_RUNS or _PARKED):
+        return
+    changed = sync_runs()
+    restored = [c.split(" ", 1)[1] for c in changed if c.startswith("restored ")]
+    if restored and not _REPLAYING:
+        scene = bpy.context.scene
+        for name in restored:
+            run = _RUNS.get(name)
+            target = bpy.data.objects.get(run["target"]) if run else None
+            if run is None or target is None:
+                continue
+            try:
+                advance(scene, run, scene.frame_current)
+                write_feather_mesh(target, run["system"].feather_geometry(), topology=False)
+            except (ValueError, plumage.PlumageError) as e:
+                print(f"Plumage: {name}: {e}")
+                _RUNS.pop(name)["system"].close()
+
+
+@persistent
 def on_load_pre(*_args: Any) -> None:
     """Another file: its objects are not these; the live systems go."""
-    for run in _RUNS.values():
+    for run in list(_RUNS.values()) + list(_PARKED.values()):
         try:
             run["system"].close()
         except Exception:
             pass
     _RUNS.clear()
+    _PARKED.clear()
 
 
 # -- the point cache ---------------------------------------------------------
@@ -635,6 +756,7 @@ def bake(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]:
     np.savez(pointcache.sidecar_path(path), positions=inputs["positions"], triangles=inputs["triangles"], counts=np.array(inputs["counts"]),
              sources=np.array(inputs["sources"]), config=np.array(json.dumps(inputs["config"])), dressed_frame=inputs["frame"],
              frames=np.array(frames), state=np.frombuffer(state, dtype=np.uint8), state_frame=frames[-1], **maps)
+    record_validation(obj, run)
     cache_modifier(target, props.cache_path, frames[0])
     props.use_cache = True
     _use_cache_changed(props, context)
@@ -654,7 +776,7 @@ def rebuild(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]
         maps = {k[len("map_"):]: saved[k] for k in saved.files if k.startswith("map_")}
         inputs = {"positions": saved["positions"], "triangles": saved["triangles"], "counts": [int(c) for c in saved["counts"]],
                   "sources": [str(s) for s in saved["sources"]], "config": json.loads(str(saved["config"])),
-                  "maps": {k: maps.get(k) for k in ("spacing_scale", "length_scale", "width_scale", "orientations", "layer")},
+                  "maps": {k: maps.get(k) for k in ("spacing_scale", "length_scale", "width_scale", "orientations", "layer", "feather_type")},
                   "frame": int(saved["dressed_frame"])}
         skeleton = {k[len("skeleton_"):]: saved[k] for k in saved.files if k.startswith("skeleton_")}
         if skeleton:
@@ -664,8 +786,10 @@ def rebuild(context: bpy.types.Context, obj: bpy.types.Object) -> Dict[str, Any]
     system = make_system(inputs)
     system.load_state(state)
     target = bpy.data.objects.get(obj.plumage.feathers_object) or feathers_object(obj)
+    token = obj.get(RUN_PROPERTY) or uuid.uuid4().hex  # the saved Dress's: undoing later steps keeps it live
+    obj[RUN_PROPERTY] = token
     run = {"system": system, "frame": state_frame, "start": inputs["frame"], "target": target.name, "sources": inputs["sources"],
-           "counts": inputs["counts"], "inputs": inputs}
+           "counts": inputs["counts"], "inputs": inputs, "token": token, "object": obj.name}
     old = _RUNS.pop(obj.name, None)
     if old:
         old["system"].close()
@@ -698,6 +822,8 @@ class PlumageSettings(bpy.types.PropertyGroup):
     width_map: StringProperty(name="Width map")
     layer_group: StringProperty(name="Layer group", description="Vertex group painting the layers: where neighbouring feathers' "
                                 "weights differ, the higher lies on top (empty: no layers)")
+    type_group: StringProperty(name="Type group", description="Vertex group choosing the feather type: feathers where its weight is "
+                               "below 0.5 (or outside it), scales where it is 0.5 or more (empty: the preset everywhere)")
     mode: EnumProperty(name="Mode", items=[("INCREMENTAL", "Incremental", ""), ("LEGACY", "Legacy", ""), ("REBUILD", "Rebuild", "")])
     preset: EnumProperty(
         name="Preset",
@@ -826,6 +952,24 @@ class PLUMAGE_OT_bake(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class PLUMAGE_OT_validate(bpy.types.Operator):
+    bl_idname = "plumage.validate"
+    bl_label = "Validate"
+    bl_description = "Check the live coat at the current frame exactly: intersecting pairs, body penetrations, coverage and discord (shown in the panel)"
+
+    @classmethod
+    def poll(cls, context: bpy.types.Context) -> bool:
+        return not _package_missing(cls) and context.object is not None and context.object.name in _RUNS
+
+    def execute(self, context: bpy.types.Context) -> set:
+        figures = record_validation(context.object, _RUNS[context.object.name])
+        if figures is None:
+            self.report({"WARNING"}, "no feathers to validate")
+            return {"CANCELLED"}
+        self.report({"INFO"}, "; ".join(validation_text(context.object)))
+        return {"FINISHED"}
+
+
 class PLUMAGE_OT_rebuild(bpy.types.Operator):
     bl_idname = "plumage.rebuild"
     bl_label = "Rebuild live system"
@@ -876,6 +1020,7 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
         if props.flow in ("AXIS", "ATTRIBUTE"):
             layout.prop(props, "flow_axis" if props.flow == "AXIS" else "flow_attribute")
         layout.prop(props, "layer_group")
+        layout.prop(props, "type_group")
         layout.prop(props, "spacing_map")
         layout.prop(props, "length_map")
         layout.prop(props, "width_map")
@@ -886,6 +1031,15 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
         sources = [o.name for o in dress_sources(context, obj)]
         layout.label(text=f"Dresses {len(sources)} mesh{'es' if len(sources) != 1 else ''}: {', '.join(sources)[:80]}")
         layout.operator("plumage.dress")
+        lines = validation_text(obj)
+        if lines:
+            box = layout.box()
+            v = obj[VALIDATION_PROPERTY]
+            icon = "CHECKMARK" if v["pairs"] == 0 and v["penetrations"] == 0 else "ERROR"
+            for k, line in enumerate(lines):
+                box.label(text=line, icon=icon if k == 0 else "NONE")
+        if obj.name in _RUNS:
+            layout.operator("plumage.validate")
         layout.prop(props, "cache_path")
         layout.prop(props, "use_cache")
         row = layout.row()
@@ -894,7 +1048,7 @@ class PLUMAGE_PT_panel(bpy.types.Panel):
             row.operator("plumage.rebuild")
 
 
-CLASSES = (PlumageSettings, PLUMAGE_OT_dress, PLUMAGE_OT_bake, PLUMAGE_OT_rebuild, PLUMAGE_PT_panel)
+CLASSES = (PlumageSettings, PLUMAGE_OT_dress, PLUMAGE_OT_bake, PLUMAGE_OT_validate, PLUMAGE_OT_rebuild, PLUMAGE_PT_panel)
 
 
 def register() -> None:
@@ -903,6 +1057,8 @@ def register() -> None:
     bpy.types.Object.plumage = PointerProperty(type=PlumageSettings)
     bpy.app.handlers.frame_change_post.append(on_frame_change)
     bpy.app.handlers.load_pre.append(on_load_pre)
+    bpy.app.handlers.undo_post.append(on_undo_redo)
+    bpy.app.handlers.redo_post.append(on_undo_redo)
 
 
 def unregister() -> None:
@@ -910,6 +1066,9 @@ def unregister() -> None:
         bpy.app.handlers.frame_change_post.remove(on_frame_change)
     if on_load_pre in bpy.app.handlers.load_pre:
         bpy.app.handlers.load_pre.remove(on_load_pre)
+    for handlers in (bpy.app.handlers.undo_post, bpy.app.handlers.redo_post):
+        if on_undo_redo in handlers:
+            handlers.remove(on_undo_redo)
     on_load_pre()
     del bpy.types.Object.plumage
     for cls in reversed(CLASSES):

@@ -18,12 +18,13 @@ PoseWriter::PoseWriter(const std::string& path, PlumageConfig cfg, double fps, c
     cfg.progress = nullptr;
     cfg.progress_user_data = nullptr;
     const char magic[8] = {'P', 'L', 'M', 'P', 'O', 'S', 'E', '\0'};
-    // Version 1 unless the blocks version 2 added are present: older readers keep reading the rest.
+    // The lowest version that holds the blocks present: older readers keep reading what they know.
+    const bool types = !maps.feather_type.empty();
     const bool v2 = !maps.layer.empty() || maps.skeleton.has_value();
-    const uint32_t head[2] = {v2 ? 2u : 1u, static_cast<uint32_t>(sizeof cfg)};
+    const uint32_t head[2] = {types ? 3u : v2 ? 2u : 1u, static_cast<uint32_t>(sizeof cfg)};
     const uint64_t counts[3] = {rest.size() / 3, indices.size() / 3, times.size()};
     const uint32_t mask = (maps.spacing.empty() ? 0u : 1u) | (maps.length.empty() ? 0u : 2u) | (maps.width.empty() ? 0u : 4u) | (maps.flow.empty() ? 0u : 8u) |
-                          (maps.layer.empty() ? 0u : 16u) | (maps.skeleton ? 32u : 0u);
+                          (maps.layer.empty() ? 0u : 16u) | (maps.skeleton ? 32u : 0u) | (types ? 64u : 0u);
     const uint32_t tail[2] = {mask, 0};
     write(magic, sizeof magic);
     write(head, sizeof head);
@@ -47,6 +48,12 @@ PoseWriter::PoseWriter(const std::string& path, PlumageConfig cfg, double fps, c
         write(k.joint_parents.data(), k.joint_parents.size() * sizeof(int32_t));
         write(k.vertex_joints.data(), k.vertex_joints.size() * sizeof(uint32_t));
         write(k.vertex_weights.data(), k.vertex_weights.size() * sizeof(float));
+    }
+    if (types) {
+        const uint32_t counts_t[2] = {static_cast<uint32_t>(maps.feather_types.size()), 0};
+        write(counts_t, sizeof counts_t);
+        write(maps.feather_types.data(), maps.feather_types.size() * sizeof(uint32_t));
+        write(maps.feather_type.data(), maps.feather_type.size() * sizeof(uint32_t));
     }
 }
 

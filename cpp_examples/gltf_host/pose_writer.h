@@ -4,12 +4,13 @@
 // the library with exactly the same input. Little-endian, native layout:
 //
 //   char     magic[8]        "PLMPOSE\0"
-//   uint32_t version         1, or 2 when a layer map or a skeleton is present
+//   uint32_t version         1; 2 when a layer map or a skeleton is present; 3 when
+//                            feather types are (the lowest that holds what is written)
 //   uint32_t config_size     sizeof(PlumageConfig)
 //   uint64_t vertex_count, triangle_count, frame_count
 //   double   fps
 //   uint32_t maps            bit 0 spacing, 1 length, 2 width, 3 flow; version 2 also
-//                            bit 4 layer, 5 skeleton
+//                            bit 4 layer, 5 skeleton; version 3 also bit 6 feather types
 //   uint32_t reserved        0
 //   PlumageConfig config     as created with (progress pointers zeroed)
 //   float    rest[3 * vertex_count]
@@ -21,6 +22,8 @@
 //            uint32_t reserved 0; float joint_positions[3 * joint_count];
 //            int32_t joint_parents[joint_count]; uint32_t vertex_joints[influences * vertex_count];
 //            float vertex_weights[influences * vertex_count]   (as PlumageSkeleton gets them)
+//   feather types (if present): uint32_t type_count, reserved 0; uint32_t types[type_count]
+//            (PLUMAGE_PRESET_* each type is initialised from); uint32_t feather_type[vertex_count]
 //   float    frames[frame_count][3 * vertex_count]
 #pragma once
 

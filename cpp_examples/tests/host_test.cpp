@@ -663,6 +663,23 @@ int poses() {
         std::memcpy(&head, b.data() + at + 8, 4);
         CHECK(joints == 23 && influences >= 1 && influences <= 4 && head == -1);
         CHECK(b.size() == at + 16 + 16 * joints + 8 * influences * c[0] + 12 * c[0] * c[2]);
+        // Feather types: version 3, the types block (count, reserved, presets, one type per vertex) after the skeleton.
+        const Run t = run_host({fox, "--frames", "1", "--feathers", "60", "--validate", "none", "--type-map", "TEXCOORD_0:1", "--feather-types",
+                                "kite,scales,feathers", "--poses", file});
+        CHECK_MSG(t.exit_code == 0, t.err);
+        const std::string tb = slurp(file);
+        const size_t skeleton_at = 56 + config_size + 12 * c[0] + 12 * c[1] + 8 * c[2];
+        const size_t types_at = skeleton_at + 16 + 16 * joints + 8 * influences * c[0];
+        CHECK(tb.size() > types_at + 8);
+        if (tb.size() <= types_at + 8) return 0;
+        std::memcpy(&version, tb.data() + 8, 4);
+        std::memcpy(&maps, tb.data() + 48, 4);
+        uint32_t type_head[2] = {}, presets[3] = {};
+        std::memcpy(type_head, tb.data() + types_at, 8);
+        std::memcpy(presets, tb.data() + types_at + 8, 12);
+        CHECK(version == 3 && maps == (32u | 64u) && type_head[0] == 3 && type_head[1] == 0);
+        CHECK(presets[0] == 3 && presets[1] == 1 && presets[2] == 0);  // PLUMAGE_PRESET_KITE, _SCALES, _FEATHERS
+        CHECK(tb.size() == types_at + 8 + 12 + 4 * c[0] + 12 * c[0] * c[2]);
         const Run off = run_host({fox, "--frames", "0", "--feathers", "60", "--validate", "none", "--skeleton-flow", "off", "--poses", file});
         CHECK_MSG(off.exit_code == 0, off.err);
         const std::string v1 = slurp(file);

@@ -267,3 +267,75 @@ def test_blender_install_puts_the_package_where_blender_imports_it(tmp_path: Pat
              "print('PLUMAGE_RESULT ' + json.dumps({'error': a.IMPORT_ERROR, 'file': a.plumage.__file__}))")
     result = _blender_json(blender, ["--python-expr", check], env, factory=False)  # as a user starts it (its config is empty here)
     assert result["error"] == "" and result["file"].startswith(str(scripts / "modules")), result
+
+
+def test_blender_install_enable_turns_the_addon_on(tmp_path: Path) -> None:
+    """`--addon DIR --enable`: the add-on is enabled and the preferences saved, so that a new Blender (as the user
+    starts it, its preferences read) has it on, its panel's properties registered, without enabling it by hand."""
+    blender = _blender()
+    scripts = tmp_path / "scripts"
+    env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config"), "PLUMAGE_BLENDER": blender}
+    env.pop("PYTHONPATH", None)
+    run = subprocess.run([sys.executable, "-m", "plumage.blender_install", "--addon", str(REPO / "blender" / "plumage_feathers"), "--enable"],
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=300)
+    assert run.returncode == 0, run.stdout
+    assert "enabled the add-on plumage_feathers" in run.stdout, run.stdout
+    check = ("import bpy, json, sys; a = sys.modules.get('plumage_feathers'); "
+             "print('PLUMAGE_RESULT ' + json.dumps({'enabled': sorted(x.module for x in bpy.context.preferences.addons), "
+             "'loaded': a is not None, 'error': a.IMPORT_ERROR if a else None, 'panel': hasattr(bpy.types.Object, 'plumage')}))")
+    result = _blender_json(blender, ["--python-expr", check], env, factory=False)
+    assert "plumage_feathers" in result["enabled"] and result["loaded"] and result["error"] == "" and result["panel"], result
+    # without --addon, --enable is refused
+    run = subprocess.run([sys.executable, "-m", "plumage.blender_install", "--enable"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         text=True, env=env, timeout=60)
+    assert run.returncode == 2 and "give --addon DIR too" in run.stdout, run.stdout
+
+
+def test_type_group_hidden_meshes_panel_figures_and_undo(tmp_path: Path) -> None:
+    """A Type group puts scales on one mesh of a rig (width/length of its feathers 1, the rest feathers), 0 pairs
+    and 0 penetrations; hidden meshes under the armature are not dressed; the panel's validation figures; an undone
+    Dress drops the live system it made (the one it replaced is live again), a redo brings it back."""
+    blender = _blender()
+    addon_zip = _addon_zip(tmp_path)
+    scripts = tmp_path / "scripts"
+    shutil.copytree(Path(plumage.__file__).parent, scripts / "modules" / "plumage", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
+    r = _blender_json(blender, ["--python", str(REPO / "blender" / "tests" / "blender_groups.py"), "--", str(addon_zip)], env, timeout=300)
+    assert r["sources"] == r["dressed_sources"] == ["Leg", "Torso"], r  # not HiddenViewport nor HiddenLayer
+    assert r["types"] == {"dtype": "uint32", "leg_all_scales": True, "torso_all_feathers": True}, r["types"]
+    leg, torso = r["leg"], r["torso"]
+    assert leg["feathers"] >= 20 and abs(leg["ratio_median"] - 1.0) < 0.05 and 0.9 <= leg["ratio_min"] <= leg["ratio_max"] <= 1.1, leg
+    assert torso["feathers"] >= 200 and torso["ratio_median"] < 0.8, torso
+    for f in r["frames"]:
+        assert f["pairs"] == 0 and f["penetrations"] == 0, f
+    assert r["panel_after_dress"][0].startswith("Validated at frame 1: 0 pairs, 0 penetrations"), r["panel_after_dress"]
+    assert r["panel_after_validate"][0].startswith("Validated at frame 6: 0 pairs, 0 penetrations"), r["panel_after_validate"]
+    assert "coverage" in r["panel_after_validate"][1] and "discord" in r["panel_after_validate"][1]
+    figures = r["panel_figures"]
+    assert figures["frame"] == 6 and figures["coverage"] > 0.5 and 0 <= figures["discord_percent"] <= 100, figures
+    assert r["second_is_other"]
+    assert r["undo_restores_first"] and r["restored_mesh_is_current"] and r["restored_follows_frames"], r["undo"]
+    assert r["undo_drops_first"] and r["no_stale_follow"], r["undo"]
+    assert r["undo_steps_to_first"] == 2, r["undo"]  # the seed's step, then the first Dress's own
+    assert not r["undo"][1]["feathers_object"], r["undo"]  # the feathers object the first Dress made is undone too
+    assert r["redo_restores_first"], r["undo"]
+    assert all(len(u["parked"]) <= r["parked_at_most"] for u in r["undo"]), r["undo"]
+
+
+def test_imported_gltf_character_is_dressed_valid_and_scrubs_as_playback(tmp_path: Path) -> None:
+    """scripts/make_character.py's walking figure through Blender's own glTF importer (with the `numpy.bool = bool`
+    shim the README gives for Debian's Blender 3.4 beside numpy 1.24): its armature dressed, 0 pairs and 0
+    penetrations on frames 1..8, scrubbing 6, 2, 8 gives playback's state."""
+    blender = _blender()
+    addon_zip = _addon_zip(tmp_path)
+    model = tmp_path / "character.glb"
+    subprocess.run([sys.executable, str(REPO / "scripts" / "make_character.py"), str(model)], check=True)
+    scripts = tmp_path / "scripts"
+    shutil.copytree(Path(plumage.__file__).parent, scripts / "modules" / "plumage", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
+    r = _blender_json(blender, ["--python", str(REPO / "blender" / "tests" / "blender_gltf.py"), "--", str(addon_zip), str(model)], env, timeout=300)
+    assert r["sources"] == ["body"] and r["flow_from"] == "skeleton", r
+    assert 600 <= r["feathers"] <= 1000 and r["moved"] > 0.05, r
+    for f in r["frames"]:
+        assert f["pairs"] == 0 and f["penetrations"] == 0 and f["coverage"] > 0.5, f
+    assert [s["frame"] for s in r["scrub"]] == [6, 2, 8] and all(s["is_playback"] for s in r["scrub"]), r["scrub"]

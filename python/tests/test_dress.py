@@ -432,6 +432,13 @@ def test_usage_and_input_errors(tmp_path) -> None:
         (["builtin", "--layer-map", "NORMAL"], 2, "the built-in model has none"),
         ([str(fox), "--layer-map", "_NOPE"], 2, "no vertex attribute _NOPE"),
         ([str(fox), "--skeleton-flow", "maybe"], 2, "invalid choice"),
+        ([str(fox), "--type-map", "_NOPE"], 2, "no vertex attribute _NOPE"),
+        (["builtin", "--type-map", "NORMAL"], 2, "the built-in model has none"),
+        ([str(fox), "--feather-types", "feathers,fur"], 2, "feathers|sleek|kite|scales"),
+        ([str(fox), "--validate", "sometimes"], 2, "invalid choice"),
+        ([str(fox), "--theta", "nan"], 2, "finite number"),
+        ([str(fox), "--memory-limit", "-1"], 2, "integer from 0"),
+        ([str(fox), "--fluffiness", "-4", "--frames", "1"], 4, "fluffiness"),  # the library's refusal, as the host's
         ([str(tmp_path / "nope.glb")], 3, "nope.glb"),
     ]
     for args, code, message in cases:
@@ -455,3 +462,127 @@ def test_progress_is_shown_on_long_runs(capsys) -> None:
     quiet.start -= 30
     quiet.frame_done(3, 10)
     assert capsys.readouterr().err == ""
+
+
+# ---------------------------------------------------------------- every option that changes the coat
+
+
+def character(tmp: Path) -> Path:
+    """scripts/make_character.py's walking figure: _FEATHER_TYPE 1 on the legs, _LAYER 1 on the arms."""
+    out = tmp / "character.glb"
+    if not out.is_file():
+        subprocess.run([sys.executable, str(REPO / "scripts" / "make_character.py"), str(out)], check=True)
+    return out
+
+
+COAT_OPTIONS = [
+    ["--theta", "37.5", "--sampler", "random", "--drift-tolerance", "5.3", "--settle-rate", "0.7"],
+    ["--curvature-min-scale", "0.65", "--fluffiness", "12.25", "--shaft-segments", "2", "--bend-limit", "31.1"],
+    ["--memory-limit", "512", "--preset", "kite", "--theta", "0.1", "--settle-rate", "0"],
+    ["--preset", "scales", "--sampler", "guided", "--bend-limit", "1e-3", "--shaft-segments", "3", "--fluffiness", "4.0001"],
+]
+
+
+def both_inputs(host: str, tmp: Path, model: Path, *extra: str):
+    """The host's pose file and `dress`'s prepared input for the same options."""
+    from plumage.__main__ import dress_parser, prepare
+
+    poses = host_poses(host, tmp, str(model), "--frames", "2", *extra, glb=False)
+    count = [] if "--spacing" in extra else ["--feathers", "60"]
+    run = prepare(dress_parser().parse_args([str(model), "--out", "x.usda", "--frames", "2", *count, "--threads", "1", *extra]))
+    return run, poses
+
+
+def assert_same_library_input(run, poses, extra) -> None:
+    from plumage.poses import config_from_struct
+    from plumage.system import _build_config
+
+    assert config_from_struct(_build_config(run.config, run.preset)) == poses.config, extra
+    assert sorted(run.maps) == sorted(poses.maps), extra
+    for key, value in poses.maps.items():
+        if key == "skeleton":
+            assert_same_skeleton(run.maps[key], value)
+        elif key == "feather_types":
+            assert tuple(run.maps[key]) == value, extra
+        else:
+            assert run.maps[key].dtype == value.dtype and run.maps[key].tobytes() == value.tobytes(), (key, extra)
+    assert run.rest.tobytes() == poses.rest.tobytes() and np.array_equal(run.triangles, poses.triangles)
+
+
+@pytest.mark.parametrize("extra", COAT_OPTIONS)
+def test_coat_options_configure_the_library_as_the_host(host, tmp_path, extra) -> None:
+    """--theta, --sampler, --drift-tolerance, --settle-rate, --curvature-min-scale, --fluffiness, --shaft-segments,
+    --bend-limit and --memory-limit give the library the host's configuration, byte for byte, on a shared model and
+    on the test character."""
+    for model in (shared_model("Fox"), character(tmp_path)):
+        run, poses = both_inputs(host, tmp_path, model, *extra)
+        assert_same_library_input(run, poses, extra)
+    assert poses.config["memory_limit"] == (512 << 20 if "--memory-limit" in extra else 0)
+
+
+def test_type_map_and_types_are_the_hosts(host, tmp_path) -> None:
+    """--type-map NAME[:C] with --feather-types: the per-vertex types (rounded) and the presets reach the library as
+    the host hands them (pose file version 3), with the layer map and the skeleton; on the character and the bird."""
+    import struct
+
+    model = character(tmp_path)
+    for extra in (["--type-map", "_FEATHER_TYPE"], ["--type-map", "_FEATHER_TYPE:0", "--feather-types", "sleek,kite", "--layer-map", "_LAYER"],
+                  ["--type-map", "_LAYER", "--feather-types", "scales,feathers,kite", "--flow", "0,-1,0"]):
+        run, poses = both_inputs(host, tmp_path, model, *extra)
+        assert struct.unpack_from("<I", (tmp_path / "run.poses").read_bytes(), 8)[0] == 3
+        assert_same_library_input(run, poses, extra)
+        assert run.maps["feather_type"].dtype == np.uint32 and set(np.unique(run.maps["feather_type"])) == {0, 1}
+    assert poses.maps["feather_types"] == ("scales", "feathers", "kite")
+    # legs are type 1 in _FEATHER_TYPE: scales there by default
+    run, poses = both_inputs(host, tmp_path, model, "--type-map", "_FEATHER_TYPE")
+    assert poses.maps["feather_types"] == ("feathers", "scales") and 0 < poses.maps["feather_type"].mean() < 1
+    # a float attribute rounded half away from zero, negative values 0: the bird's UVs scaled into 0..2
+    bird = shared_model("bird")
+    run, poses = both_inputs(host, tmp_path, bird, "--type-map", "TEXCOORD_0:1", "--feather-types", "feathers,scales,kite,sleek")
+    assert_same_library_input(run, poses, "bird")
+    # no type map: no types, whatever --feather-types says (as the host)
+    run, poses = both_inputs(host, tmp_path, model, "--feather-types", "kite")
+    assert "feather_type" not in run.maps and "feather_types" not in poses.maps
+    assert struct.unpack_from("<I", (tmp_path / "run.poses").read_bytes(), 8)[0] == 2  # the skeleton only
+
+
+def test_dress_reports_flow_validation_and_sampling(host, tmp_path) -> None:
+    """dress prints where the flow came from (the host's config.flow_from), the sampling's field singularities and,
+    with --validate, each validated frame's pairs, penetrations, coverage and discord; native and --host agree."""
+    pytest.importorskip("pxr", reason="usd-core is not installed")
+    import re
+
+    model = str(character(tmp_path))
+    options = ["--feathers", "300", "--frames", "3", "--threads", "1", "--type-map", "_FEATHER_TYPE", "--layer-map", "_LAYER",
+               "--theta", "20", "--quiet"]
+    native = dress(tmp_path, model, "--out", "native.usda", "--validate", "every", *options)
+    assert native.returncode == 0, native.stderr
+    hosted = dress(tmp_path, model, "--out", "hosted.usda", "--validate", "every", "--host", host, *options)
+    assert hosted.returncode == 0, hosted.stderr
+    assert (tmp_path / "native.usda").read_bytes() == (tmp_path / "hosted.usda").read_bytes()
+    run_host(host, model, *options[:-1], "--validate", "every", "--report", str(tmp_path / "r.json"))
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["config"]["flow_from"] == "skeleton"
+    for out in (native.stdout, hosted.stdout):
+        assert "flow_from skeleton" in out and "flow from the skeleton (16 joints)" in out
+        assert re.search(r"field_singularities \d+", out)
+        frames = re.findall(r"frame (\d)/3 .*: pairs (\d+), penetrations (\d+), coverage ([\d.]+), discord_percent ([\d.]+)", out)
+        assert [f[0] for f in frames] == ["1", "2", "3"] and "rest pose: pairs" in out
+    assert native.stdout.split("->")[1].count("discord_percent") == hosted.stdout.split("->")[1].count("discord_percent") == 4
+    # the same figures as the host's report, frame by frame
+    host_frames = report["frames"]
+    assert len(host_frames) == 3
+    ours = re.findall(r"frame \d/3 .*: pairs (\d+), penetrations (\d+), coverage ([\d.]+), discord_percent ([\d.]+)", native.stdout)
+    for v, (pairs, pen, cov, discord) in zip(host_frames, ours):
+        assert (v["intersecting_pairs"], v["body_penetrations"]) == (int(pairs), int(pen))
+        assert abs(v["coverage"] - float(cov)) < 1e-4 and abs(v["discord_percent"] - float(discord)) < 0.01
+    assert int(re.search(r"field_singularities (\d+)", native.stdout).group(1)) == report["sampling"]["field_singularities"]
+    # flow from a source, an axis, a map; last only; none
+    bird = str(shared_model("bird"))
+    for on, extra, source in ((model, ["--flow-source", "0,2,0"], "flow_source"), (model, ["--flow", "0,-1,0"], "flow_axis"),
+                              (bird, ["--flow-map", "NORMAL"], "flow_map"), (bird, ["--skeleton-flow", "off"], "flow_source")):
+        run = dress(tmp_path, on, "--out", "x.usda", "--feathers", "100", "--frames", "2", *extra)
+        assert run.returncode == 0 and f"flow_from {source}" in run.stdout, run.stderr
+        assert "frame 2/2" in run.stdout and "frame 1/2" not in run.stdout  # --validate last by default
+    run = dress(tmp_path, model, "--out", "x.usda", "--feathers", "100", "--frames", "2", "--validate", "none")
+    assert run.returncode == 0 and "discord_percent" not in run.stdout and "field_singularities" in run.stdout

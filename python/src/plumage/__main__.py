@@ -10,6 +10,7 @@ instead (its `--poses` file), which also accepts the host's other options.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import shutil
 import subprocess
@@ -104,6 +105,19 @@ def _finite(text: str) -> float:
     return v
 
 
+def _float32(text: str) -> float:
+    """A number as the host's parse_float keeps it: the nearest float32."""
+    return float(np.float32(_finite(text)))
+
+
+def _feather_types(text: str) -> Tuple[str, ...]:
+    names = tuple(text.split(","))
+    for name in names:
+        if name not in ("feathers", "sleek", "kite", "scales"):
+            raise argparse.ArgumentTypeError(f"{text}: expected P,P,... with each P one of feathers|sleek|kite|scales")
+    return names
+
+
 def _resolution(text: str) -> Tuple[int, int]:
     fields = text.split(",")
     if len(fields) != 2 or not all(f.isdigit() and 3 <= int(f) <= 4096 for f in fields):
@@ -138,8 +152,22 @@ def dress_parser() -> argparse.ArgumentParser:
     count.add_argument("--feathers", type=_nonnegative(2**32 - 1), metavar="N", help="target feather count")
     count.add_argument("--spacing", type=_finite, metavar="D", help="root spacing in model units (instead of --feathers)")
     c.add_argument("--seed", type=_nonnegative(2**64 - 1), help="random seed")
+    c.add_argument("--sampler", choices=["guided", "random"], help="how roots are placed (default guided)")
+    c.add_argument("--theta", type=_float32, metavar="DEG", help="the feathers' pitch above the surface, in degrees")
     c.add_argument("--mode", choices=["incremental", "legacy", "rebuild"], help="how frames are solved (default incremental)")
     c.add_argument("--threads", type=_nonnegative(2**32 - 1), help="worker threads (0 = all cores)")
+    c.add_argument("--memory-limit", type=_nonnegative(2**44 - 1), metavar="MIB",
+                   help="most heap the library's system may hold (default: no limit); a create or step that would pass it is refused")
+    c.add_argument("--drift-tolerance", type=_float32, metavar="DEG",
+                   help="incremental: how far a feather may drift before it is readjusted (default 17.2)")
+    c.add_argument("--settle-rate", type=_float32, metavar="DEG",
+                   help="incremental: most a readjusted feather settles toward its solved pose in a frame (default 2; 0 = at once)")
+    c.add_argument("--curvature-min-scale", type=_float32, metavar="S",
+                   help="smallest spacing factor where the surface bends tighter than a feather (default 0.4; 1 = uniform)")
+    c.add_argument("--fluffiness", type=_float32, metavar="DEG", help="extra pitch added to every feather (default 0)")
+    c.add_argument("--shaft-segments", type=_nonnegative(2**32 - 1), metavar="S",
+                   help="shaft segments of a feather, 1 to 4 (default 4; 1 = the rigid kite)")
+    c.add_argument("--bend-limit", type=_float32, metavar="DEG", help="largest bend at each shaft joint (default 22.9)")
     c.add_argument("--flow", type=_vector, metavar="X,Y,Z", help="flow axis")
     c.add_argument("--flow-source", type=_vector, metavar="X,Y,Z",
                    help="feathers flow away from this point along the surface; with no --flow, --flow-source or "
@@ -155,7 +183,12 @@ def dress_parser() -> argparse.ArgumentParser:
                    help="flow direction from components C..C+2, in the mesh's own space (overrides --flow and --flow-source)")
     m.add_argument("--layer-map", type=_map, metavar="NAME[:C]",
                    help="per-vertex layer: where neighbouring feathers' layers differ, the higher lies on top")
+    m.add_argument("--type-map", type=_map, metavar="NAME[:C]", help="per-vertex feather type (rounded), an index into --feather-types")
+    m.add_argument("--feather-types", type=_feather_types, metavar="P,P,...",
+                   help="the types' proportions from presets feathers|sleek|kite|scales (default feathers,scales)")
     o = p.add_argument_group("output")
+    o.add_argument("--validate", choices=["every", "last", "none"], default="last",
+                   help="exact validation (pairs, penetrations, coverage, discord) of every frame, the last, or none (default last)")
     o.add_argument("--up-axis", choices=["Y", "Z"], default="Y", help="stage up axis (glTF is Y-up)")
     o.add_argument("--quiet", action="store_true", help="no progress on stderr")
     h = p.add_argument_group("through the C++ host instead (plumage_gltf evaluates the glTF; other options go to it)")
@@ -182,9 +215,50 @@ class DressInput:
     maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays, `skeleton` a gltf.SkinSkeleton
     warnings: List[str]
 
+    @property
+    def flow_from(self) -> str:
+        """Where the orientation field comes from, as the host's report `config.flow_from` (the library's precedence)."""
+        return flow_from(self.config, self.maps)
+
     def frames(self) -> Iterator[np.ndarray]:
         for t in self.times:
             yield self.subject.pose_at(float(t))
+
+
+def flow_from(config: Dict[str, Any], maps: Dict[str, Any]) -> str:
+    if maps.get("orientations") is not None:
+        return "flow_map"
+    if config.get("flow_source") is not None:
+        return "flow_source"
+    return "skeleton" if maps.get("skeleton") is not None else "flow_axis"
+
+
+def flow_line(config: Dict[str, Any], maps: Dict[str, Any]) -> str:
+    source = flow_from(config, maps)
+    if source == "skeleton":
+        return f"flow from the skeleton ({len(maps['skeleton'].joint_parents)} joints)"
+    if source == "flow_source":
+        return "flow from the flow source ({:g}, {:g}, {:g})".format(*config["flow_source"])
+    if source == "flow_map":
+        return "flow from the flow map"
+    axis = config.get("flow_axis")
+    return "flow along the axis" + (" ({:g}, {:g}, {:g})".format(*axis) if axis is not None else " (the preset's)")
+
+
+def sampling_line(system: Any) -> str:
+    s = system.sampling_stats()
+    if s is None:
+        return "sampling: none"
+    return f"sampling: {s.roots} roots, spacing {s.spacing:.4g}, field_singularities {s.field_singularities}"
+
+
+def validation_line(what: str, v: Any) -> str:
+    return (f"{what}: pairs {v.intersecting_pairs}, penetrations {v.body_penetrations}, coverage {v.coverage:.4f}, "
+            f"discord_percent {v.discord_percent:.2f}")
+
+
+def validate_frame(when: str, k: int, n: int) -> bool:
+    return when == "every" or (when == "last" and k + 1 == n)
 
 
 def prepare(args: argparse.Namespace) -> DressInput:
@@ -192,7 +266,7 @@ def prepare(args: argparse.Namespace) -> DressInput:
     (main.cpp: open_subject, make_config, default_flow, frame_times)."""
     from .gltf import GltfUsageError, Scene, frame_times
 
-    maps_asked = [(k, getattr(args, k)) for k in ("spacing_map", "length_map", "width_map", "flow_map", "layer_map") if getattr(args, k)]
+    maps_asked = [(k, getattr(args, k)) for k in ("spacing_map", "length_map", "width_map", "flow_map", "layer_map", "type_map") if getattr(args, k)]
     if args.input == "builtin":
         from .builtin import ProceduralBody
 
@@ -213,12 +287,25 @@ def prepare(args: argparse.Namespace) -> DressInput:
             maps[name] = subject.vertex_attribute(spec.attribute, spec.first, 1)
     if args.flow_map:
         maps["orientations"] = subject.rest_directions(args.flow_map.attribute, args.flow_map.first)
+    if args.type_map:
+        # whole numbers in the attribute, rounded half away from zero (std::lround); negative ones are 0
+        values = np.maximum(subject.vertex_attribute(args.type_map.attribute, args.type_map.first, 1), np.float32(0)).astype(np.float64)
+        maps["feather_type"] = np.floor(values + 0.5).astype(np.uint32)
+        maps["feather_types"] = tuple(args.feather_types or ("feathers", "scales"))
 
+    # the host's make_config: degrees to radians in double, then float
     config: Dict[str, Any] = {}
-    for key, field in (("feathers", "target_feathers"), ("spacing", "spacing"), ("seed", "seed"), ("mode", "mode"),
-                       ("threads", "threads"), ("flow", "flow_axis"), ("flow_source", "flow_source")):
+    for key, field in (("feathers", "target_feathers"), ("spacing", "spacing"), ("sampler", "sampler"), ("seed", "seed"), ("mode", "mode"),
+                       ("threads", "threads"), ("flow", "flow_axis"), ("flow_source", "flow_source"),
+                       ("curvature_min_scale", "curvature_min_scale"), ("shaft_segments", "shaft_segments")):
         if getattr(args, key) is not None:
             config[field] = getattr(args, key)
+    for key, field in (("theta", "theta"), ("drift_tolerance", "drift_tolerance"), ("settle_rate", "settle_rate"),
+                       ("bend_limit", "bend_limit"), ("fluffiness", "fluffiness")):
+        if getattr(args, key) is not None:
+            config[field] = getattr(args, key) * math.pi / 180.0
+    if args.memory_limit is not None:
+        config["memory_limit"] = args.memory_limit << 20
     rest = subject.rest_positions
     skeleton = None
     if args.flow is None and args.flow_source is None and args.flow_map is None and len(rest) and args.skeleton_flow == "on":
@@ -308,13 +395,24 @@ def dress_native(args: argparse.Namespace) -> int:
         print(w, file=sys.stderr)
     progress = Progress(not args.quiet)
     n = len(run.times)
+    checks: List[str] = []
     try:
         with System(run.rest, run.triangles, **run.maps, preset=run.preset, progress=progress.library, **run.config) as system:
+            checks.append(sampling_line(system))
+            if args.validate != "none":
+                v = system.validate()
+                if v is not None:
+                    checks.append(validation_line("rest pose", v))
             try:
                 writer = usd.UsdWriter(args.out, run.fps, run.rest, run.triangles, system.feather_geometry(), up_axis=args.up_axis)
                 for k, (seconds, pose) in enumerate(zip(run.times, run.frames())):
                     progress.context = f"frame {k + 1}/{n}"
                     system.step(pose)
+                    # validation after the step, as the host: not step time
+                    if validate_frame(args.validate, k, n):
+                        v = system.validate()
+                        if v is not None:
+                            checks.append(validation_line(f"frame {k + 1}/{n} (t = {float(seconds):g} s)", v))
                     writer.add_frame(float(seconds), pose, system.feather_geometry())
                     progress.frame_done(k + 1, n)
                 writer.save()
@@ -332,6 +430,9 @@ def dress_native(args: argparse.Namespace) -> int:
     progress.clear()
     print(f"plumage dress: {args.input}, mesh \"{run.subject.mesh_name}\": {len(run.rest)} vertices, {count} feathers, "
           f"{n} frames at {run.fps:g} fps -> {args.out}")
+    print(f"plumage dress: {flow_line(run.config, run.maps)} (flow_from {run.flow_from})")
+    for line in checks:
+        print(f"plumage dress: {line}")
     return 0
 
 
@@ -341,15 +442,17 @@ def _host_args(args: argparse.Namespace) -> List[str]:
     for m in args.mesh:
         out += ["--mesh", m]
     defaults = dress_parser().parse_args(["x", "--out", "x"])
-    for key in ("animation", "fps", "start", "frames", "model_resolution", "preset", "feathers", "spacing", "seed", "mode", "threads",
-                "flow", "flow_source", "skeleton_flow", "spacing_map", "length_map", "width_map", "flow_map", "layer_map"):
+    for key in ("animation", "fps", "start", "frames", "model_resolution", "preset", "feathers", "spacing", "sampler", "theta", "seed", "mode",
+                "threads", "memory_limit", "drift_tolerance", "settle_rate", "curvature_min_scale", "fluffiness", "shaft_segments", "bend_limit",
+                "flow", "flow_source", "skeleton_flow", "spacing_map", "length_map", "width_map", "flow_map", "layer_map", "type_map",
+                "feather_types"):
         value = getattr(args, key)
         if value is None or value == getattr(defaults, key):
             continue
         if isinstance(value, MapSpec):
             value = f"{value.attribute}:{value.first}"
         elif isinstance(value, tuple):
-            value = ",".join(repr(v) for v in value)
+            value = ",".join(v if isinstance(v, str) else repr(v) for v in value)
         out += ["--" + key.replace("_", "-"), str(value)]
     return out
 
@@ -382,18 +485,28 @@ def dress_with_host(args: argparse.Namespace, host_extra: List[str]) -> int:
             sys.stderr.write(run.stderr)
             return run.returncode
         poses = read_poses(poses_path)
+    n = len(poses.times)
+    checks: List[str] = []
     try:
         with System(poses.rest, poses.triangles, **poses.maps, **poses.config) as system:
+            checks.append(sampling_line(system))
+            if args.validate != "none" and (v := system.validate()) is not None:
+                checks.append(validation_line("rest pose", v))
             writer = usd.UsdWriter(args.out, poses.fps, poses.rest, poses.triangles, system.feather_geometry(), up_axis=args.up_axis)
-            for seconds, frame in zip(poses.times, poses.frames):
+            for k, (seconds, frame) in enumerate(zip(poses.times, poses.frames)):
                 system.step(frame)
+                if validate_frame(args.validate, k, n) and (v := system.validate()) is not None:
+                    checks.append(validation_line(f"frame {k + 1}/{n} (t = {float(seconds):g} s)", v))
                 writer.add_frame(float(seconds), frame, system.feather_geometry())
             writer.save()
             count = system.feather_count
     except PlumageError as e:
         print(f"plumage dress: {e}", file=sys.stderr)
         return EXIT_LIBRARY
-    print(f"plumage dress: {len(poses.rest)} vertices, {count} feathers, {len(poses.times)} frames at {poses.fps:g} fps -> {args.out}")
+    print(f"plumage dress: {len(poses.rest)} vertices, {count} feathers, {n} frames at {poses.fps:g} fps -> {args.out}")
+    print(f"plumage dress: {flow_line(poses.config, poses.maps)} (flow_from {flow_from(poses.config, poses.maps)})")
+    for line in checks:
+        print(f"plumage dress: {line}")
     return 0
 
 

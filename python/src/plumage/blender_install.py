@@ -1,4 +1,4 @@
-"""`python -m plumage.blender_install [--blender PATH] [--target DIR] [--addon DIR]`:
+"""`python -m plumage.blender_install [--blender PATH] [--target DIR] [--addon DIR [--enable]]`:
 puts this package, with the library it carries, where Blender's own Python
 finds it.
 
@@ -11,8 +11,12 @@ there (replacing an older copy), then starts Blender again to check that
 ``--target`` copies to another folder instead (checked only when it is a
 ``modules`` folder Blender can be pointed at). ``--addon DIR`` also copies
 the add-on folder (``blender/plumage_feathers`` of the repository) to the
-user add-ons folder; enable it in Edit > Preferences > Add-ons.
-Exit status 0 when Blender imports the package, 1 otherwise.
+user add-ons folder; with ``--enable`` it is also enabled (in a Blender
+started for it: ``bpy.ops.preferences.addon_enable`` then
+``bpy.ops.wm.save_userpref``, so the user's preferences keep it on),
+otherwise enable it in Edit > Preferences > Add-ons.
+Exit status 0 when Blender imports the package (and, with ``--enable``, the
+add-on is on in a new Blender), 1 otherwise.
 """
 
 from __future__ import annotations
@@ -46,7 +50,24 @@ try:
 except Exception as e:
     out["plumage"] = None
     out["plumage_error"] = f"{type(e).__name__}: {e}"
+out["addons_enabled"] = sorted(a.module for a in bpy.context.preferences.addons)
 print("PLUMAGE_PROBE " + json.dumps(out))
+"""
+
+# Enables add-on MODULE and saves the preferences (run in the Blender the user starts, not --factory-startup)
+ENABLE = r"""
+import json, sys
+import bpy
+module = sys.argv[sys.argv.index("--") + 1]
+out = {}
+try:
+    bpy.ops.preferences.addon_enable(module=module)
+    bpy.ops.wm.save_userpref()
+    out["enabled"] = module in {a.module for a in bpy.context.preferences.addons}
+except Exception as e:
+    out["enabled"] = False
+    out["error"] = f"{type(e).__name__}: {e}"
+print("PLUMAGE_ENABLE " + json.dumps(out))
 """
 
 
@@ -69,6 +90,19 @@ def probe(blender: str, env: Optional[Dict[str, str]] = None, factory: bool = Fa
             found: Dict[str, object] = json.loads(line[len("PLUMAGE_PROBE "):])
             return found
     raise SystemExit(f"{blender} did not answer (exit {run.returncode}):\n{run.stdout[-2000:]}")
+
+
+def enable_addon(blender: str, module: str, env: Optional[Dict[str, str]] = None) -> Dict[str, object]:
+    """Enables the add-on in Blender's preferences and saves them."""
+    cmd = [blender, "-b", "--python-exit-code", "1", "--python-expr", ENABLE, "--", module]
+    run = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env, timeout=300)
+    for line in run.stdout.splitlines():
+        if line.startswith("PLUMAGE_ENABLE "):
+            found: Dict[str, object] = json.loads(line[len("PLUMAGE_ENABLE "):])
+            if not found.get("enabled") and "error" not in found:
+                found["error"] = run.stdout[-2000:]
+            return found
+    return {"enabled": False, "error": f"{blender} did not answer (exit {run.returncode}):\n{run.stdout[-2000:]}"}
 
 
 def install(target: Path) -> Path:
@@ -96,7 +130,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument("--blender", help="the Blender program (default: $PLUMAGE_BLENDER, then blender on PATH)")
     parser.add_argument("--target", help="copy into this folder instead of Blender's user modules folder")
     parser.add_argument("--addon", help="also copy this add-on folder (the repository's blender/plumage_feathers) to Blender's user add-ons")
+    parser.add_argument("--enable", action="store_true", help="with --addon: also enable it and save Blender's preferences")
     args = parser.parse_args(argv)
+    if args.enable and not args.addon:
+        parser.error("--enable enables the add-on --addon installs: give --addon DIR too")
 
     blender = find_blender(args.blender)
     info = probe(blender)
@@ -111,7 +148,13 @@ def main(argv: Optional[List[str]] = None) -> int:
         addons = Path(str(info["addons"]))
         shutil.rmtree(addons / src.name, ignore_errors=True)
         shutil.copytree(src, addons / src.name, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
-        print(f"installed the add-on in {addons / src.name}: enable it in Edit > Preferences > Add-ons")
+        print(f"installed the add-on in {addons / src.name}" + ("" if args.enable else ": enable it in Edit > Preferences > Add-ons (or pass --enable)"))
+        if args.enable:
+            enabled = enable_addon(blender, src.name)
+            if not enabled.get("enabled"):
+                print(f"Blender did not enable the add-on {src.name}: {enabled.get('error')}", file=sys.stderr)
+                return 1
+            print(f"enabled the add-on {src.name} (saved in Blender's preferences)")
 
     # the check: Blender as the user starts it imports the package
     env = dict(os.environ)
@@ -127,6 +170,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     print(f"Blender imports plumage {after['plumage']} from {after['plumage_file']}")
     if not after.get("numpy"):
         print("Blender's Python has no numpy: the add-on needs it", file=sys.stderr)
+        return 1
+    if args.enable and str(Path(args.addon).name) not in (after.get("addons_enabled") or []):
+        print(f"the add-on {Path(args.addon).name} is not on in a new Blender: were the preferences saved?", file=sys.stderr)
         return 1
     return 0
 

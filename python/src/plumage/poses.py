@@ -1,7 +1,7 @@
 """Reads the file `plumage_gltf --poses FILE` writes: what the C++ glTF host
 handed the library (rest mesh, configuration, per-vertex maps, and every
 stepped frame's positions; from version 2 also the layer map and the
-skeleton), so that Python drives the library with exactly the same input. The layout is documented in cpp_examples/gltf_host/pose_writer.h.
+skeleton, from version 3 the per-vertex feather types), so that Python drives the library with exactly the same input. The layout is documented in cpp_examples/gltf_host/pose_writer.h.
 """
 
 from __future__ import annotations
@@ -22,6 +22,9 @@ MAGIC = b"PLMPOSE\0"
 _HEAD = struct.Struct("<8sII3QdII")
 _SKELETON_HEAD = struct.Struct("<IIiI")  # joint_count, influences, head_joint, reserved (version 2)
 _SKELETON_BIT = 1 << 5
+_TYPES_HEAD = struct.Struct("<II")  # type_count, reserved (version 3)
+_TYPES_BIT = 1 << 6
+_PRESET_NAMES = {v: k for k, v in _ffi.PRESETS.items()}
 
 
 class PosesFormatError(ValueError):
@@ -36,7 +39,8 @@ class Poses:
     frames: npt.NDArray[np.float32]  # (frames, n, 3)
     fps: float
     config: Dict[str, Any]  # keyword arguments of plumage.System
-    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays, `skeleton` a plumage.Skeleton
+    maps: Dict[str, Any]  # keyword arguments of plumage.System (those present): float32 arrays, `skeleton` a plumage.Skeleton,
+    # `feather_type` a uint32 array with `feather_types` the preset names
 
 
 def config_from_struct(raw: _ffi.Config) -> Dict[str, Any]:
@@ -58,10 +62,14 @@ def read_poses(path: Union[str, Path]) -> Poses:
     magic, version, config_size, nv, nt, nf, fps, mask, _ = _HEAD.unpack_from(data, 0)
     if magic != MAGIC:
         raise PosesFormatError(f"{path}: not a pose file (written by plumage_gltf --poses)")
-    if version not in (1, 2):
-        raise PosesFormatError(f"{path}: pose file version {version}; this package reads versions 1 and 2")
+    if version not in (1, 2, 3):
+        raise PosesFormatError(f"{path}: pose file version {version}; this package reads versions 1 to 3")
     if version == 1 and mask >> 4:
         raise PosesFormatError(f"{path}: version 1 with map bits {mask:#x} (layer and skeleton came with version 2)")
+    if version < 3 and mask >> 6:
+        raise PosesFormatError(f"{path}: version {version} with map bits {mask:#x} (feather types came with version 3)")
+    if mask >> 7:
+        raise PosesFormatError(f"{path}: unknown map bits {mask:#x}")
     if config_size != ctypes.sizeof(_ffi.Config):
         raise PosesFormatError(f"{path}: PlumageConfig of {config_size} bytes; this package's has {ctypes.sizeof(_ffi.Config)}")
     map_sizes = [("spacing_scale", nv), ("length_scale", nv), ("width_scale", nv), ("orientations", 3 * nv), ("layer", nv)]
@@ -74,6 +82,13 @@ def read_poses(path: Union[str, Path]) -> Poses:
             raise PosesFormatError(f"{path}: too short for its skeleton")
         joints, influences, head_joint, _ = _SKELETON_HEAD.unpack_from(data, at)
         expected += _SKELETON_HEAD.size + 16 * joints + 8 * influences * nv
+    type_count = 0
+    if mask & _TYPES_BIT:
+        at = expected - 12 * nv * nf  # the types block sits before the frames, after the skeleton
+        if len(data) < at + _TYPES_HEAD.size:
+            raise PosesFormatError(f"{path}: too short for its feather types")
+        type_count, _ = _TYPES_HEAD.unpack_from(data, at)
+        expected += _TYPES_HEAD.size + 4 * type_count + 4 * nv
     if len(data) != expected:
         raise PosesFormatError(f"{path}: {len(data)} bytes where its header announces {expected}")
     offset = _HEAD.size
@@ -101,5 +116,13 @@ def read_poses(path: Union[str, Path]) -> Poses:
         vertex_joints = take("<u4", influences * nv).reshape(nv, influences)
         vertex_weights = take("<f4", influences * nv).reshape(nv, influences)
         maps["skeleton"] = Skeleton(positions, parents, vertex_joints, vertex_weights, head_joint)
+    if mask & _TYPES_BIT:
+        offset += _TYPES_HEAD.size
+        presets = take("<u4", type_count)
+        unknown = [int(p) for p in presets if int(p) not in _PRESET_NAMES]
+        if unknown:
+            raise PosesFormatError(f"{path}: feather type preset {unknown[0]} is none this package knows")
+        maps["feather_types"] = tuple(_PRESET_NAMES[int(p)] for p in presets)
+        maps["feather_type"] = take("<u4", nv)
     frames = take("<f4", 3 * nv * nf).reshape(nf, nv, 3)
     return Poses(rest=rest, triangles=triangles, times=times, frames=frames, fps=fps, config=config_from_struct(raw), maps=maps)
