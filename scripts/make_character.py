@@ -3,11 +3,14 @@
 facing +Z) made of capsules (torso, head, upper and lower arms and legs),
 skinned to 16 joints (each capsule rigid to its bone, blended into the
 neighbouring joint near its ends), with a one-second walk cycle (arms and
-legs swinging, knees bending). The same figure as tests/common/character.rs.
+legs swinging, knees bending, the head nodding). The same figure as tests/common/character.rs.
 Vertex attribute _FEATHER_TYPE is 1 on the legs and 0 elsewhere (for
 --type-map), _LAYER is 1 on the arms and 0 elsewhere (for --layer-map).
+With --parts the figure is two skinned meshes on the one skin ("trunk": the
+torso and head; "limbs") and a rigid "crest" (a capsule on top of the head,
+a mesh node child of the head joint): a character as a DCC holds one.
 
-usage: make_character.py OUT.glb   (needs numpy and pygltflib)
+usage: make_character.py OUT.glb [--parts]   (needs numpy and pygltflib)
 """
 import math
 import sys
@@ -58,6 +61,8 @@ def capsule(a, b, r, rings, cap, sides):
 
 
 def character():
+    """The figure's arrays, and the vertex count of its trunk (torso and head
+    come first)."""
     pos, tris, joints, weights, kind, layer = [], [], [], [], [], []
 
     def add(p, along, t, own, prev, nxt):
@@ -78,10 +83,11 @@ def character():
     j = lambda k: np.array(JOINTS[k][0])
     add(*capsule(j(0) - [0, 0.05, 0], j(1) + [0, 0.05, 0], 0.17, 10, 4, 24), 0, None, 1)
     add(*capsule(j(2), j(3) - [0, 0.1, 0], 0.1, 5, 4, 16), 2, 1, None)
+    trunk = sum(len(x) for x in pos)
     for a, b, r in LIMBS:
         has_child = any(p == b for _, p in JOINTS)
         add(*capsule(j(a), j(b), r, 8, 3, 12), a, JOINTS[a][1], b if has_child else None)
-    return np.concatenate(pos), np.concatenate(tris), np.array(joints), np.array(weights), np.array(kind), np.array(layer)
+    return np.concatenate(pos), np.concatenate(tris), np.array(joints), np.array(weights), np.array(kind), np.array(layer), trunk
 
 
 def quat(axis, angle):
@@ -89,8 +95,8 @@ def quat(axis, angle):
     return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(angle / 2))
 
 
-def main(out):
-    positions, triangles, joints, weights, kind, layer = character()
+def main(out, parts=False):
+    positions, triangles, joints, weights, kind, layer, trunk = character()
     times = np.linspace(0.0, 1.0, 25)
     swing = 0.6 * np.sin(2 * math.pi * times)
     rotations = {  # joint -> (axis, angle per key)
@@ -98,6 +104,7 @@ def main(out):
         5: ((0, 1, 0), 0.5 * swing), 8: ((0, 1, 0), -0.5 * swing),
         10: ((1, 0, 0), swing), 13: ((1, 0, 0), -swing),
         11: ((1, 0, 0), 0.5 * np.abs(swing)), 14: ((1, 0, 0), 0.5 * np.abs(swing)),
+        2: ((1, 0, 0), 0.2 * swing),  # the head nods
     }
     blob = bytearray()
 
@@ -122,18 +129,34 @@ def main(out):
         base = np.array(JOINTS[parent][0]) if parent >= 0 else np.zeros(3)
         nodes.append(g.Node(name=name, translation=(np.array(p) - base).tolist(),
                             children=[c for c, (_, q) in enumerate(JOINTS) if q == k]))
-    mesh_node = len(nodes)
-    nodes.append(g.Node(name="body", mesh=0, skin=0))
+    def primitive(lo, hi):
+        tri = triangles[(triangles >= lo).all(1) & (triangles < hi).all(1)] - lo
+        attrs = g.Attributes(
+            POSITION=accessor(positions[lo:hi].astype(np.float32), g.FLOAT, g.VEC3, g.ARRAY_BUFFER, True),
+            JOINTS_0=accessor(joints[lo:hi].astype(np.uint16), g.UNSIGNED_SHORT, g.VEC4, g.ARRAY_BUFFER),
+            WEIGHTS_0=accessor(weights[lo:hi].astype(np.float32), g.FLOAT, g.VEC4, g.ARRAY_BUFFER))
+        attrs._FEATHER_TYPE = accessor(kind[lo:hi].astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
+        attrs._LAYER = accessor(layer[lo:hi].astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
+        indices = accessor(tri.astype(np.uint32).reshape(-1), g.UNSIGNED_INT, g.SCALAR, g.ELEMENT_ARRAY_BUFFER)
+        return g.Primitive(attributes=attrs, indices=indices)
+
+    roots = [0]
+    spans = [("trunk", 0, trunk), ("limbs", trunk, len(positions))] if parts else [("body", 0, len(positions))]
+    gltf.meshes = []
+    for name, lo, hi in spans:
+        gltf.meshes.append(g.Mesh(name=name, primitives=[primitive(lo, hi)]))
+        roots.append(len(nodes))
+        nodes.append(g.Node(name=name, mesh=len(gltf.meshes) - 1, skin=0))
+    if parts:
+        # A rigid crest on the head: a capsule in the head joint's space.
+        p, _, t = capsule((0.0, 0.0, -0.05), (0.0, 0.12, -0.12), 0.04, 3, 2, 10)
+        crest = g.Attributes(POSITION=accessor(p.astype(np.float32), g.FLOAT, g.VEC3, g.ARRAY_BUFFER, True))
+        crest_indices = accessor(t.astype(np.uint32).reshape(-1), g.UNSIGNED_INT, g.SCALAR, g.ELEMENT_ARRAY_BUFFER)
+        gltf.meshes.append(g.Mesh(name="crest", primitives=[g.Primitive(attributes=crest, indices=crest_indices)]))
+        nodes.append(g.Node(name="crest", mesh=len(gltf.meshes) - 1))
+        nodes[3].children = list(nodes[3].children or []) + [len(nodes) - 1]
     gltf.nodes = nodes
-    gltf.scenes = [g.Scene(nodes=[0, mesh_node])]
-    attrs = g.Attributes(
-        POSITION=accessor(positions.astype(np.float32), g.FLOAT, g.VEC3, g.ARRAY_BUFFER, True),
-        JOINTS_0=accessor(joints.astype(np.uint16), g.UNSIGNED_SHORT, g.VEC4, g.ARRAY_BUFFER),
-        WEIGHTS_0=accessor(weights.astype(np.float32), g.FLOAT, g.VEC4, g.ARRAY_BUFFER))
-    attrs._FEATHER_TYPE = accessor(kind.astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
-    attrs._LAYER = accessor(layer.astype(np.float32), g.FLOAT, g.SCALAR, g.ARRAY_BUFFER)
-    indices = accessor(triangles.astype(np.uint32).reshape(-1), g.UNSIGNED_INT, g.SCALAR, g.ELEMENT_ARRAY_BUFFER)
-    gltf.meshes = [g.Mesh(name="body", primitives=[g.Primitive(attributes=attrs, indices=indices)])]
+    gltf.scenes = [g.Scene(nodes=roots)]
     inverse_bind = np.array([np.eye(4) for _ in JOINTS], np.float32)
     for k, (p, _) in enumerate(JOINTS):
         inverse_bind[k][3, :3] = -np.array(p)  # column-major: the translation is the last column
@@ -152,6 +175,6 @@ def main(out):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
+    if len(sys.argv) not in (2, 3) or (len(sys.argv) == 3 and sys.argv[2] != "--parts"):
         sys.exit(__doc__)
-    main(sys.argv[1])
+    main(sys.argv[1], parts=len(sys.argv) == 3)

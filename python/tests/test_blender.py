@@ -322,19 +322,21 @@ def test_type_group_hidden_meshes_panel_figures_and_undo(tmp_path: Path) -> None
     assert all(len(u["parked"]) <= r["parked_at_most"] for u in r["undo"]), r["undo"]
 
 
-def test_imported_gltf_character_is_dressed_valid_and_scrubs_as_playback(tmp_path: Path) -> None:
+@pytest.mark.parametrize("parts", [False, True], ids=["one_mesh", "two_meshes_and_a_rigid_crest"])
+def test_imported_gltf_character_is_dressed_valid_and_scrubs_as_playback(tmp_path: Path, parts: bool) -> None:
     """scripts/make_character.py's walking figure through Blender's own glTF importer (with the `numpy.bool = bool`
     shim the README gives for Debian's Blender 3.4 beside numpy 1.24): its armature dressed, 0 pairs and 0
-    penetrations on frames 1..8, scrubbing 6, 2, 8 gives playback's state."""
+    penetrations on frames 1..8, scrubbing 6, 2, 8 gives playback's state. With `--parts` the figure is two skinned
+    meshes on one skin and a crest parented to the head bone: all three are dressed as one coat."""
     blender = _blender()
     addon_zip = _addon_zip(tmp_path)
     model = tmp_path / "character.glb"
-    subprocess.run([sys.executable, str(REPO / "scripts" / "make_character.py"), str(model)], check=True)
+    subprocess.run([sys.executable, str(REPO / "scripts" / "make_character.py"), str(model), *(["--parts"] if parts else [])], check=True)
     scripts = tmp_path / "scripts"
     shutil.copytree(Path(plumage.__file__).parent, scripts / "modules" / "plumage", ignore=shutil.ignore_patterns("__pycache__"))
     env = {**os.environ, "BLENDER_USER_SCRIPTS": str(scripts), "BLENDER_USER_CONFIG": str(tmp_path / "config")}
     r = _blender_json(blender, ["--python", str(REPO / "blender" / "tests" / "blender_gltf.py"), "--", str(addon_zip), str(model)], env, timeout=300)
-    assert r["sources"] == ["body"] and r["flow_from"] == "skeleton", r
+    assert r["sources"] == (["crest", "limbs", "trunk"] if parts else ["body"]) and r["flow_from"] == "skeleton", r
     assert 600 <= r["feathers"] <= 1000 and r["moved"] > 0.05, r
     for f in r["frames"]:
         assert f["pairs"] == 0 and f["penetrations"] == 0 and f["coverage"] > 0.5, f
