@@ -30,7 +30,7 @@ mod steps;
 mod sweep;
 
 pub use height_field::HeightField;
-pub use levels::{AdjustStats, Adjuster, CandidateLists, OrderedRun, Selection, adjust_in_order};
+pub use levels::{AdjustStats, Adjuster, OrderedRun, Selection, adjust_in_order};
 pub use steps::adjust_feather;
 
 use crate::feather::{FeatherPose, FeatherTriangles};

@@ -7,6 +7,7 @@
 use crate::Config;
 use crate::adjustment::AdjustParams;
 use crate::body::BodyIndex;
+use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::mesh::WeldedMesh;
@@ -151,6 +152,12 @@ pub struct Coat {
 }
 
 impl Coat {
+    /// The obstacle candidates of every feather (`Coat::neighbourhoods`):
+    /// row i lists, sorted, the roots within reach of root i.
+    pub fn obstacle_candidates(&self) -> CsrView<'_, u32> {
+        CsrView::from(self.neighbourhoods.obstacle_csr())
+    }
+
     /// Moves the coat to `positions` (welded) and re-poses every root.
     pub fn pose(&mut self, dressing: &Dressing, positions: &[Vec3]) {
         self.positions.clear();

@@ -3,8 +3,9 @@
 //! order static and every feather adjusted from a flat start.
 
 use super::phases::{self, Workspace};
-use crate::adjustment::{AdjustSteps, CandidateLists, OrderedRun, Selection};
+use crate::adjustment::{AdjustSteps, OrderedRun, Selection};
 use crate::coat::{Coat, Dressing};
+use crate::csr::CsrView;
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::progress::{Phase, Progress};
@@ -50,13 +51,12 @@ pub fn solve_beside<R: Send>(
     coat.poses.resize(dressing.len(), FeatherPose::default());
     phases::static_order(coat, dressing, work, order_start);
     progress.check(Phase::Adjusting, 0.0)?;
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let run = OrderedRun {
         frames: &coat.frames,
         shapes: &dressing.shapes,
         order: coat.order.order(),
         rank: coat.order.ranks(),
-        candidates: CandidateLists::new(offsets, indices),
+        candidates: CsrView::from(coat.neighbourhoods.obstacle_csr()),
         body: &coat.body,
         params: &dressing.adjust_params,
         steps: AdjustSteps::Full,

@@ -44,11 +44,12 @@
 
 use super::phases::{self, Workspace};
 use crate::Mode;
-use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, CandidateLists, OrderedRun, Selection};
-use crate::animation::contact::{Candidates, Contacts, Footprint, Posed, Sphere};
+use crate::adjustment::{AdjustStats, AdjustSteps, Adjuster, OrderedRun, Selection};
+use crate::animation::contact::{Contacts, Footprint, Posed, Sphere};
 use crate::animation::motion::{RootMap, root_maps};
 use crate::body::BodyIndex;
 use crate::coat::{Coat, Dressing, Oriented, Placement, orientation};
+use crate::csr::{Csr, CsrView};
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::geometry::RootFrame;
@@ -93,8 +94,7 @@ fn watch_other_parts(coat: &Coat, dressing: &Dressing, suspects: &mut [bool], id
 pub struct StepWorkspace {
     previous_frames: Vec<RootFrame>,
     previous_ranks: Vec<u32>,
-    previous_offsets: Vec<u32>,
-    previous_indices: Vec<u32>,
+    previous_candidates: Csr<u32>,
     maps: Vec<RootMap>,
     displacement: Vec<f32>,
     net: Vec<f32>,
@@ -140,10 +140,9 @@ pub fn step_coat(
     if body_indexed {
         neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing, progress)?;
     }
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    let rank = coat.order.ranks();
     let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
-    step.contacts.update(posed, &dressing.adjust_params, Candidates { offsets, indices, rank }, progress);
+    let candidates = coat.obstacle_candidates();
+    step.contacts.update(posed, &dressing.adjust_params, candidates, coat.order.ranks(), progress);
     progress.check(Phase::Ordering, 0.3)?;
 
     // 2. R_k from the relative motion of the roots since the last frame.
@@ -207,18 +206,17 @@ pub fn step_coat(
     let stats = if n == 0 {
         AdjustStats::default()
     } else {
-        let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+        let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
         let pass = Pass { dressing, steps, frames: &coat.frames, order: &coat.order, body: &coat.body };
-        let rows = step.contacts.obstacle_rows(Candidates { offsets, indices, rank: coat.order.ranks() });
-        let full = CandidateLists::new(offsets, indices);
-        work.adjuster.reserve_obstacles((0..n).map(|i| full.of(i).len()).max().unwrap_or(0));
+        let rows = step.contacts.obstacle_rows(candidates, coat.order.ranks());
+        work.adjuster.reserve_obstacles((0..n).map(|i| candidates.row(i).len()).max().unwrap_or(0));
         let settle_rate = if incremental { dressing.config.settle_rate } else { 0.0 };
         work.adjuster.settle_next_run(settle_rate);
         let stats = pass.run(
             Walk::Levels,
             &mut work.adjuster,
             &mut coat.poses,
-            CandidateLists::new(rows.0, rows.1),
+            rows,
             pass.selection(&step.seeds, verify.then_some(&step.suspects[..])),
             &|done| progress.check(Phase::Adjusting, done).is_ok(),
         );
@@ -228,8 +226,7 @@ pub fn step_coat(
         coat.settling.clear();
         coat.settling.extend_from_slice(work.adjuster.settling());
         let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
-        let candidates = Candidates { offsets, indices, rank: coat.order.ranks() };
-        let missed = step.contacts.missed(posed, candidates, work.adjuster.adjusted());
+        let missed = step.contacts.missed(posed, candidates, coat.order.ranks(), work.adjuster.adjusted());
         if missed > 0 {
             // Feathers an earlier one now lies on unlisted: readjust them
             // (and, past θs, what lies on them) with their full lists.
@@ -245,7 +242,7 @@ pub fn step_coat(
                 Walk::Sparse,
                 &mut work.adjuster,
                 &mut coat.poses,
-                CandidateLists::new(offsets, indices),
+                candidates,
                 pass.selection(seeds, verify.then_some(&step.no_suspects[..])),
                 &|_| progress.check(Phase::Adjusting, 1.0).is_ok(),
             );
@@ -312,7 +309,7 @@ impl Pass<'_> {
         walk: Walk,
         adjuster: &mut Adjuster,
         poses: &mut [FeatherPose],
-        candidates: CandidateLists<'_>,
+        candidates: CsrView<'_, u32>,
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
@@ -352,11 +349,7 @@ fn remember(coat: &Coat, step: &mut StepWorkspace) {
     step.previous_frames.extend_from_slice(&coat.frames);
     step.previous_ranks.clear();
     step.previous_ranks.extend_from_slice(coat.order.ranks());
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    step.previous_offsets.clear();
-    step.previous_offsets.extend_from_slice(offsets);
-    step.previous_indices.clear();
-    step.previous_indices.extend_from_slice(indices);
+    step.previous_candidates.copy_from(coat.obstacle_candidates());
 }
 
 /// Records, for each feather adjusted since the last record (all of them
@@ -376,7 +369,7 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
         *s = Sphere::of(&frames[j], &shapes[j], poses[j]);
     });
     orientations_into(frames, &mut step.orientations);
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
     let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
     let oriented = |j: usize| Oriented { frame: &frames[j], orientation: step.orientations[j] };
     for i in 0..n {
@@ -389,8 +382,8 @@ fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut StepWorksp
             Placement::of(oriented(i), j, oriented(j as usize), here.position.distance(there.position))
         });
         let footprint = Footprint::of(&shapes[i], &dressing.adjust_params);
-        let row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
-        let resting = row
+        let resting = candidates
+            .row(i)
             .iter()
             .filter(|&&j| ranks[j as usize] < ranks[i] && footprint.reached_by(here, spheres[j as usize]))
             .map(|&j| Placement::of(oriented(i), j, oriented(j as usize), shapes[j as usize].length));
@@ -419,7 +412,7 @@ fn surroundings_displacement(
     progress: &Progress,
 ) {
     let (maps, frames, ranks, contacts) = (&step.maps, &coat.frames, &step.previous_ranks, &step.contacts);
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
+    let candidates = coat.obstacle_candidates();
     let (nb, staleness) = (&coat.neighbourhoods, &coat.staleness);
     let n = dressing.len();
     step.displacement.resize(n, 0.0);
@@ -445,8 +438,7 @@ fn surroundings_displacement(
             let j = j as usize;
             worst = worst.max(here.relative(&maps[j]).at(frame.position.distance(frames[j].position)));
         }
-        let row = offsets[i] as usize..offsets[i + 1] as usize;
-        for (e, &j) in row.clone().zip(&indices[row]) {
+        for (e, &j) in candidates.span(i).zip(candidates.row(i)) {
             if worst > enough {
                 break;
             }
@@ -471,12 +463,11 @@ fn surroundings_displacement(
 /// their final poses finds whether a new one meets it, and one that went
 /// away only leaves it higher than needed (module notes).
 fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
-    let (old_offsets, old_indices) = (&step.previous_offsets, &step.previous_indices);
+    let (candidates, old_candidates) = (coat.obstacle_candidates(), step.previous_candidates.view());
     let (old_rank, rank) = (&step.previous_ranks, coat.order.ranks());
     let (contacts, frames) = (&step.contacts, &coat.frames);
     let n = step.seeds.len();
-    let same_rows = old_offsets.len() == n + 1;
+    let same_rows = old_candidates.rows() == n;
     step.seeds
         .par_iter_mut()
         .zip(step.suspects.par_iter_mut())
@@ -486,9 +477,8 @@ fn obstacles_changed(coat: &Coat, step: &mut StepWorkspace, verify: bool) {
         // surroundings moved at all is one already.
         .filter(|(_, (s, v))| !(**s || verify && **v))
         .for_each(|(i, (seed, suspect))| {
-            let new_row = &indices[offsets[i] as usize..offsets[i + 1] as usize];
-            let old_row =
-                if same_rows { &old_indices[old_offsets[i] as usize..old_offsets[i + 1] as usize] } else { &[] };
+            let new_row = candidates.row(i);
+            let old_row = if same_rows { old_candidates.row(i) } else { &[] };
             let footprint = contacts.footprint(i);
             let mut changed = false;
             let lost = status_changes(old_row, new_row, |j, in_old, in_new| {
@@ -525,8 +515,7 @@ fn status_changes(old: &[u32], new: &[u32], mut changed: impl FnMut(usize, bool,
 crate::memory::heap_size_of_fields!(StepWorkspace {
     previous_frames,
     previous_ranks,
-    previous_offsets,
-    previous_indices,
+    previous_candidates,
     maps,
     displacement,
     net,

@@ -22,6 +22,7 @@ use super::checks::bounding_sphere;
 use super::obstacle::ObstacleBoxes;
 use super::{AdjustParams, AdjustSteps, DrapeRoute, HeightField};
 use crate::body::BodyIndex;
+use crate::csr::{Csr, CsrView};
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use glam::Vec3;
@@ -30,9 +31,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
-    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, level_start, level_items,
-    cursor, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependent_offsets,
-    dependents
+    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
 } plain { settle_rate, #[cfg(test)] walk_share });
 
 #[cfg(test)]
@@ -40,7 +39,7 @@ mod tests;
 mod visit;
 
 use super::settle::tip_above;
-pub use visit::{CandidateLists, Selection};
+pub use visit::Selection;
 use visit::{
     Inputs, Level, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level,
 };
@@ -110,9 +109,8 @@ pub struct Adjuster {
     changed: Vec<bool>,
     adjusted: Vec<bool>,
     verified: Vec<bool>,
-    level_start: Vec<u32>,
-    level_items: Vec<u32>,
-    cursor: Vec<u32>,
+    /// The feathers of each level in order: row `l` holds level `l + 1`.
+    levels: Csr<u32>,
     outcomes: Vec<Visit>,
     workers: Vec<Worker>,
     /// The settle rate of the next run only (see [`Adjuster::settle_next_run`]).
@@ -128,8 +126,7 @@ pub struct Adjuster {
     precheck_outcomes: Vec<Precheck>,
     /// The transpose of the candidate rows of a walk over obstacle rows:
     /// the feathers listing each feather.
-    dependent_offsets: Vec<u32>,
-    dependents: Vec<u32>,
+    dependents: Csr<u32>,
     /// Tests only: replaces [`WALK_SHARE`] (0 always walks, `usize::MAX`
     /// never does).
     #[cfg(test)]
@@ -261,7 +258,7 @@ impl Adjuster {
         let settle_rate = std::mem::take(&mut self.settle_rate);
         let n = frames.len();
         assert!(
-            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.len() == n,
+            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.rows() == n,
             "adjust_in_order: frames, shapes, poses, order, rank and candidate rows must all have one entry per feather"
         );
         match selection {
@@ -281,7 +278,7 @@ impl Adjuster {
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
-        let longest = (0..n).map(|i| candidates.of(i).len()).max().unwrap_or(0);
+        let longest = (0..n).map(|i| candidates.row(i).len()).max().unwrap_or(0);
         self.reserve_obstacles(longest);
         // Body queries list each triangle at most once; a rare wide query
         // (a skin search widening far from the feather) must not grow them.
@@ -356,8 +353,8 @@ impl Adjuster {
                 if self.changed[i] {
                     // What lies on it may now meet it or stand on nothing.
                     let dependents = match walk {
-                        Walk::Symmetric => candidates.of(i),
-                        Walk::Transposed => CandidateLists::new(&self.dependent_offsets, &self.dependents).of(i),
+                        Walk::Symmetric => candidates.row(i),
+                        Walk::Transposed => self.dependents.row(i),
                     };
                     for &j in dependents {
                         if rank[j as usize] > rank[i] {
@@ -384,7 +381,7 @@ impl Adjuster {
             if !keep_going(l as f32 / levels.max(1) as f32) {
                 return None;
             }
-            let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
+            let items = self.levels.row(l);
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
             let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
@@ -394,9 +391,8 @@ impl Adjuster {
             if !keep_going(done) {
                 return None;
             }
-            let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
-            for k in 0..end - start {
-                let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
+            for k in 0..self.levels.row(l).len() {
+                let (i, outcome) = (self.levels.row(l)[k] as usize, self.outcomes[k]);
                 self.apply(i, &outcome, &inputs, poses, &mut stats);
             }
         }
@@ -453,29 +449,10 @@ impl Adjuster {
 
     /// The transpose of `candidates` into the dependents: row j lists the
     /// feathers whose candidates list j, in increasing order.
-    fn transpose(&mut self, candidates: CandidateLists<'_>) {
-        let n = candidates.len();
-        let starts = &mut self.dependent_offsets;
-        starts.clear();
-        starts.resize(n + 1, 0);
-        (0..n).flat_map(|i| candidates.of(i)).for_each(|&j| starts[j as usize] += 1);
-        let mut total = 0;
-        for s in starts.iter_mut() {
-            (*s, total) = (total, total + *s);
-        }
-        // Filled through the starts, which then hold each row's end: the
-        // start of the next.
-        self.dependents.clear();
-        self.dependents.resize(total as usize, 0);
-        for i in 0..n {
-            for &j in candidates.of(i) {
-                let at = &mut starts[j as usize];
-                self.dependents[*at as usize] = i as u32;
-                *at += 1;
-            }
-        }
-        starts.copy_within(0..n, 1);
-        starts[0] = 0;
+    fn transpose(&mut self, candidates: CsrView<'_, u32>) {
+        let n = candidates.rows();
+        let entries = || (0..n).flat_map(move |i| candidates.row(i).iter().map(move |&j| (j as usize, i as u32)));
+        self.dependents.rebuild(n, entries);
     }
 
     /// Records what became of feather `i`; an adjusted feather takes its
@@ -576,7 +553,7 @@ impl Adjuster {
     /// Marks the feathers that may be adjusted. With propagation that is
     /// the seeds (and suspects) and everything downstream of them in the
     /// obstacle relation.
-    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>, selection: Selection<'_>) {
+    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CsrView<'_, u32>, selection: Selection<'_>) {
         let n = order.len();
         self.in_scope.clear();
         match selection {
@@ -592,7 +569,7 @@ impl Adjuster {
                     if !self.in_scope[i] {
                         let ri = rank[i];
                         self.in_scope[i] =
-                            candidates.of(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
+                            candidates.row(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
                     }
                 }
             }
@@ -601,7 +578,7 @@ impl Adjuster {
 
     /// Levels of the feathers in scope and the per-level lists (each in
     /// order). Returns the number of levels.
-    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>) -> usize {
+    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CsrView<'_, u32>) -> usize {
         let n = order.len();
         self.level.clear();
         self.level.resize(n, 0);
@@ -613,7 +590,7 @@ impl Adjuster {
             }
             let ri = rank[i];
             let below = candidates
-                .of(i)
+                .row(i)
                 .iter()
                 .filter(|&&j| rank[j as usize] < ri)
                 .map(|&j| self.level[j as usize])
@@ -625,32 +602,23 @@ impl Adjuster {
         let levels = levels as usize;
         // Level lists sized for the worst case (one feather per level, or
         // all in one) from the start, so that sparse frames never grow them.
-        self.level_start.clear();
-        self.level_start.reserve(n + 1);
-        self.cursor.reserve(n.saturating_sub(self.cursor.len()));
+        self.levels.reserve_rows(n);
         self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
-        self.level_start.resize(levels + 1, 0);
+        self.levels.begin(levels);
         for &i in order {
             let l = self.level[i as usize] as usize;
             if l > 0 {
-                self.level_start[l] += 1;
+                self.levels.count(l - 1);
             }
         }
-        for l in 0..levels {
-            self.level_start[l + 1] += self.level_start[l];
-        }
-        self.level_items.clear();
-        self.level_items.resize(self.level_start[levels] as usize, 0);
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.level_start[..levels]);
+        self.levels.allocate();
         for &i in order {
             let l = self.level[i as usize] as usize;
             if l > 0 {
-                self.level_items[self.cursor[l - 1] as usize] = i;
-                self.cursor[l - 1] += 1;
+                self.levels.place(l - 1, i);
             }
         }
-        let widest = (0..levels).map(|l| (self.level_start[l + 1] - self.level_start[l]) as usize).max().unwrap_or(0);
+        let widest = (0..levels).map(|l| self.levels.row(l).len()).max().unwrap_or(0);
         if self.outcomes.len() < widest {
             self.outcomes.resize(widest, Visit::Skipped);
         }
@@ -681,7 +649,7 @@ pub struct OrderedRun<'a> {
     pub shapes: &'a [FeatherShape],
     pub order: &'a [u32],
     pub rank: &'a [u32],
-    pub candidates: CandidateLists<'a>,
+    pub candidates: CsrView<'a, u32>,
     pub body: &'a BodyIndex,
     pub params: &'a AdjustParams,
     pub steps: AdjustSteps,

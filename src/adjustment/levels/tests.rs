@@ -1,5 +1,6 @@
 use super::super::settle::SETTLED_TIP_GAP;
 use super::*;
+use crate::csr::CsrView;
 use crate::feather::tip_position;
 use crate::ordering::{NeighbourParams, Neighbourhoods};
 use crate::rng::Rng;
@@ -38,7 +39,7 @@ impl TwoFeathers {
                 shapes: &self.shapes,
                 order: &[0, 1],
                 rank: &[0, 1],
-                candidates: CandidateLists::new(&offsets, &indices),
+                candidates: CsrView::new(&offsets, &indices),
                 body: &self.body,
                 params: &self.params,
                 steps: AdjustSteps::Full,
@@ -192,7 +193,7 @@ fn a_sparse_run_matches_the_levels() {
     let mut nb = Neighbourhoods::new();
     nb.rebuild(&frames, &reach, &NeighbourParams::default());
     let (offsets, indices) = nb.obstacle_csr();
-    let candidates = CandidateLists::new(offsets, indices);
+    let candidates = CsrView::new(offsets, indices);
     // Tips first: the feathers farther along x are earlier.
     let mut order: Vec<u32> = (0..n as u32).collect();
     order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
@@ -227,10 +228,10 @@ fn a_sparse_run_matches_the_levels() {
     let mut earlier_offsets = vec![0u32];
     let mut earlier_indices = Vec::new();
     for i in 0..n {
-        earlier_indices.extend(candidates.of(i).iter().filter(|&&j| rank[j as usize] < rank[i]));
+        earlier_indices.extend(candidates.row(i).iter().filter(|&&j| rank[j as usize] < rank[i]));
         earlier_offsets.push(earlier_indices.len() as u32);
     }
-    let earlier_only = OrderedRun { candidates: CandidateLists::new(&earlier_offsets, &earlier_indices), ..ordered };
+    let earlier_only = OrderedRun { candidates: CsrView::new(&earlier_offsets, &earlier_indices), ..ordered };
     let all = adjuster.adjust_in_order(&ordered, &mut start, Selection::All);
     assert_eq!(all.adjusted, n);
     let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());

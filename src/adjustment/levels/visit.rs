@@ -8,6 +8,7 @@ use super::super::settle::{SettlingFeather, settled_pose};
 use super::super::steps::adjust_feather_boxed;
 use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
+use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
@@ -18,39 +19,6 @@ use rayon::prelude::*;
 /// feather's grow from the far side of a thin part (see
 /// [`ObstacleFeather::far_side`]).
 const FAR_SIDE_NORMAL_DOT: f32 = -0.5;
-
-/// Candidate lists in compressed rows: the candidates of root `i` are
-/// `indices[offsets[i]..offsets[i + 1]]` (roots within reach, any order).
-#[derive(Clone, Copy, Debug)]
-pub struct CandidateLists<'a> {
-    /// Row starts, one more than the number of roots.
-    pub offsets: &'a [u32],
-    /// Concatenated candidate indices.
-    pub indices: &'a [u32],
-}
-
-impl<'a> CandidateLists<'a> {
-    /// Wraps CSR arrays.
-    pub fn new(offsets: &'a [u32], indices: &'a [u32]) -> Self {
-        Self { offsets, indices }
-    }
-
-    /// The candidates of root `i`.
-    #[inline]
-    pub fn of(&self, i: usize) -> &'a [u32] {
-        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
-    }
-
-    /// Number of roots described.
-    pub fn len(&self) -> usize {
-        self.offsets.len().saturating_sub(1)
-    }
-
-    /// Whether no root is described.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
 
 /// Which feathers an ordered adjustment touches.
 #[derive(Clone, Copy, Debug)]
@@ -135,7 +103,7 @@ pub(super) struct Inputs<'a> {
     pub(super) frames: &'a [RootFrame],
     pub(super) shapes: &'a [FeatherShape],
     pub(super) rank: &'a [u32],
-    pub(super) candidates: CandidateLists<'a>,
+    pub(super) candidates: CsrView<'a, u32>,
     pub(super) body: &'a BodyIndex,
     pub(super) params: &'a AdjustParams,
     pub(super) steps: AdjustSteps,
@@ -239,7 +207,7 @@ pub(super) fn adjust_one(
     worker: &mut Worker,
 ) -> Visit {
     let ri = inputs.rank[i];
-    let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    let earlier = inputs.candidates.row(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
     let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let mut verify = false;
     if let Some(seeds) = inputs.selection.seeds()
@@ -312,7 +280,7 @@ pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: Posed<'
     worker.obstacle_ids.extend(
         inputs
             .candidates
-            .of(i)
+            .row(i)
             .iter()
             .map(|&j| j as usize)
             .filter(|&j| inputs.rank[j] < ri)
