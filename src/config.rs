@@ -254,8 +254,7 @@ pub enum Preset {
     /// segments, a small bend), in staggered rows, each overlapping the
     /// next row by half.
     Scales,
-    /// The same as [`Preset::Feathers`] (the name the bent coat had while
-    /// the rigid kite was the default).
+    /// Another name for [`Preset::Feathers`]: always the same defaults.
     Sleek,
     /// The paper's feather: the defaults of [`Preset::Feathers`] with a
     /// rigid shaft (one segment, the flat kite). Cheaper to adjust than a

@@ -382,18 +382,14 @@ impl HeightField {
     ///
     /// Why the limit: followers lie over a feather's root region and vane
     /// corners, so a raised corner is a step every later neighbour on that
-    /// side must climb. Measured on our test coats (staggered plane, sphere
-    /// of 600 and 2400 feathers) the mean pitch was 7.8°, 12.1° and 11.4°
-    /// with the limit; letting a corner rise by half a thickness, one, two
-    /// or without bound gave 9.3/10.5/12.3/12.8° on the plane and up to
-    /// 25° on the sphere (and intersections on a torus once unbounded).
-    /// Volume balance alone or "settling" until both vanes bear escalated
-    /// further (15–50°). So the roll only ever lowers the surface later
-    /// feathers see. A consequence of the kite's shape: the vane corner has
-    /// the largest lateral-to-shaft ratio of any covered point, so lowering
-    /// the pitch by rolling nearly always lifts the corner; rolls stay
-    /// small (tenths of a degree on flat skin, more on saddles and at vane
-    /// edges where cell rounding binds) and the step mostly refines.
+    /// side must climb, and the coat's pitch escalates (BENCHMARKS.md,
+    /// "Measurements behind the code's constants"). So the roll only ever
+    /// lowers the surface later feathers see. A consequence of the kite's
+    /// shape: the vane corner has the largest lateral-to-shaft ratio of any
+    /// covered point, so lowering the pitch by rolling nearly always lifts
+    /// the corner; rolls stay small (tenths of a degree on flat skin, more
+    /// on saddles and at vane edges where cell rounding binds) and the step
+    /// mostly refines.
     ///
     /// The rolled feather needs pitch slope `f(q)` at lateral slope `q`
     /// (the upper envelope of one constraint per covered cell, each linear

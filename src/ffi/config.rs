@@ -204,8 +204,8 @@ pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
 /// each overlapping the next by half.
 pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 
-/// `plumage_config_init_preset`: the same as `PLUMAGE_PRESET_FEATHERS`
-/// (the bent coat's name while the rigid kite was the default).
+/// `plumage_config_init_preset`: another name for
+/// `PLUMAGE_PRESET_FEATHERS`, always with the same defaults.
 pub const PLUMAGE_PRESET_SLEEK: u32 = 2;
 
 /// `plumage_config_init_preset`: the paper's rigid feather, the defaults of

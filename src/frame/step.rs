@@ -37,10 +37,10 @@
 //! checked, not readjusted: one that gained an obstacle fails its check if
 //! the newcomer meets it, and one that lost an obstacle it rested on (now
 //! later in the order, so adjusted over it) is left at its pose as long as
-//! that stays clear. On the Flamingo clip (2 000 feathers, 42 frames) this
-//! took the readjustments from 592 to 485 a frame, and the mean pitch from
-//! +0.21° to +0.27° over rebuild's, with 0 pairs and penetrations. `R_k` (at θs, by the same net motion)
-//! still selects the pairs whose priorities are recomputed.
+//! that stays clear: fewer feathers are readjusted a frame, for a coat
+//! that may float a little higher (BENCHMARKS.md, "Measurements behind the
+//! code's constants"). `R_k` (at θs, by the same net motion) still selects
+//! the pairs whose priorities are recomputed.
 
 use super::phases::{self, Workspace};
 use crate::Mode;

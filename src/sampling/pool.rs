@@ -34,12 +34,11 @@ const MEMO_CELLS: usize = 8;
 /// small part of the per-point ones ...
 const MEMO_POINTS_PER_CELL: f64 = 8.0;
 /// ... and only in a mesh whose crossed faces hold more than this share of
-/// the pool: a soup whose faces all cross one another. Measured at 2 000
-/// feathers: crossed faces hold 8 % of the Flamingo's pool (at most about
-/// 710 points a face), 22 % of the bird's (2 218), none of the built-in's
-/// and the Fox's, so every shared model keeps the exact per-point test and
-/// its coat; the soup of case 83901 (below) holds its whole pool on crossed
-/// faces. A face criterion alone (4 096 points) left that case at 24 s.
+/// the pool: a soup whose faces all cross one another. The real models'
+/// crossed faces hold at most about a fifth of their pool, so they keep
+/// the exact per-point test and their coats, while the soup of case 83901
+/// (below) holds its whole pool on crossed faces (BENCHMARKS.md,
+/// "Measurements behind the code's constants").
 const MEMO_CROSSED_SHARE: f64 = 0.5;
 
 /// Share of a face that is feathered, by its number of feathered corners:
