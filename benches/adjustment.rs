@@ -107,6 +107,7 @@ impl Scene {
                 body: &self.body,
                 params: &self.params,
                 steps: AdjustSteps::Full,
+                settle_rate: 0.0,
             },
             poses,
             Selection::All,

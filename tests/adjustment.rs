@@ -199,6 +199,7 @@ impl Scene {
             body: &self.body,
             params,
             steps,
+            settle_rate: 0.0,
         }
     }
 

@@ -61,8 +61,8 @@ const SETTLE_LIFT_STEP: f32 = 0.45;
 const SETTLE_FASTER: [f32; 2] = [1.75, 2.4];
 
 /// The pose feather `i` takes on its way from `current` to `solved` (see
-/// [`Adjuster::settle_next_run`](super::Adjuster::settle_next_run)): `current` moved toward `solved` by the
-/// settle rate, if clear (the exact checks of verification, against its
+/// [`OrderedRun::settle_rate`](super::OrderedRun::settle_rate)): `current`
+/// moved toward `solved` by the settle rate, if clear (the exact checks of verification, against its
 /// obstacles at their final poses and the body: the standard a feather
 /// kept at its pose meets every frame); else, of the poses that change it
 /// least, the first clear one: that pose lifted by a few steps of half the

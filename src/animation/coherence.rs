@@ -14,7 +14,7 @@
 //!
 //! So the incremental mode settles instead of snapping
 //! (`Config::settle_rate`, default 2° a frame; see
-//! [`crate::adjustment::Adjuster::settle_next_run`]): a readjusted
+//! [`crate::adjustment::OrderedRun::settle_rate`]): a readjusted
 //! feather moves from its current pose toward its solved pose by at most
 //! the rate in pitch, roll and each bend, if that pose passes the exact
 //! checks; if not, it lifts from there by the smallest clear step, and only

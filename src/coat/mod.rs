@@ -53,7 +53,7 @@ pub struct Dressing {
     /// The connected part of the surface each triangle belongs to, and the
     /// number of parts ([`Surface::face_components`]): skin of another
     /// part near a feather is watched each frame (see
-    /// `animation::step`).
+    /// [`crate::frame::step_coat`]).
     pub face_part: Vec<u32>,
     pub parts: usize,
 }
@@ -143,6 +143,9 @@ pub struct Coat {
     /// incremental mode readjusts them again next frame (empty or all
     /// false after a solve).
     pub settling: Vec<bool>,
+    /// Which feathers the last create, step or evaluate readjusted (one
+    /// flag per feather; saved with the state).
+    pub readjusted: Vec<bool>,
     /// 0 after creation, then one more per step.
     pub frame_index: u64,
     /// Figures of the last static order.

@@ -60,6 +60,7 @@ pub fn solve_beside<R: Send>(
         body: &coat.body,
         params: &dressing.adjust_params,
         steps: AdjustSteps::Full,
+        settle_rate: 0.0,
     };
     let (side, stats) = rayon::join(beside, || {
         work.adjuster.adjust_in_order_until(&run, &mut coat.poses, Selection::All, &|done| {
@@ -69,6 +70,8 @@ pub fn solve_beside<R: Send>(
     // A stopped adjustment (None) has set the progress's stop flag.
     progress.check(Phase::Adjusting, 1.0)?;
     let stats = stats.unwrap_or_default();
+    coat.readjusted.clear();
+    coat.readjusted.extend_from_slice(work.adjuster.adjusted());
     coat.staleness.reset(dressing.len());
     coat.settling.clear();
     coat.frame_report = FrameReport {

@@ -255,6 +255,7 @@ impl System {
             body,
             staleness,
             settling,
+            readjusted,
             frame_index: _,
             ordering_report: _,
             frame_report: _,
@@ -271,6 +272,7 @@ impl System {
                 + poses.heap_bytes()
                 + staleness.heap_bytes()
                 + settling.heap_bytes()
+                + readjusted.heap_bytes()
                 + records.heap_bytes()
                 + triangles.heap_bytes()
                 + previous_poses.heap_bytes()
@@ -308,7 +310,7 @@ impl System {
     /// Which feathers the last create, step or evaluate readjusted (one flag
     /// per feather, in the order of [`System::feathers`]).
     pub fn readjusted(&self) -> &[bool] {
-        self.work.adjuster.adjusted()
+        &self.coat.readjusted
     }
 
     /// Sampling figures of the roots.
@@ -419,8 +421,7 @@ impl System {
         let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
         self.previous_frames.clone_from(&self.coat.frames);
         let limit = self.dressing.config.memory_limit;
-        let backup = (progress.is_interruptible() || limit > 0)
-            .then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
+        let backup = (progress.is_interruptible() || limit > 0).then(|| self.coat.clone());
         let result = update(self, progress).and_then(|()| match limit {
             0 => Ok(()),
             _ => match self.memory().total() {
@@ -444,9 +445,8 @@ impl System {
             }
             Err(_) => {
                 self.previous_poses = older_poses;
-                if let Some((coat, readjusted)) = backup {
+                if let Some(coat) = backup {
                     self.coat = coat;
-                    self.work.adjuster.set_adjusted(&readjusted);
                 }
             }
         }

@@ -13,8 +13,7 @@ use glam::Vec3;
 /// Saved state: save a frame, resume from it (see [`crate::snapshot`] for
 /// the blob's header and checksum). The payload is the coat
 /// ([`Coat::write_state`]), then the flags of [`System::readjusted`] (u64
-/// count, one byte 0 or 1 per feather): a per-frame report the adjuster's
-/// workspace keeps.
+/// count, one byte 0 or 1 per feather, `Coat::readjusted`).
 impl System {
     /// The state of the current frame as a self-contained blob: resuming
     /// from it with [`System::load_state`] gives byte-identical later frames.
@@ -37,7 +36,7 @@ impl System {
     pub fn load_state(&mut self, blob: &[u8]) -> Result<()> {
         let mut reader = Reader::open(blob, self.state_fingerprint())?;
         let dressing = &self.dressing;
-        let coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
+        let mut coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
         let n = reader.len(1, Some(dressing.len()))?;
         let mut readjusted = Vec::with_capacity(n);
         for _ in 0..n {
@@ -48,8 +47,8 @@ impl System {
             }
         }
         reader.finish()?;
+        coat.readjusted = readjusted;
         self.coat = coat;
-        self.work.adjuster.set_adjusted(&readjusted);
         self.pose_changes = PoseChanges::default();
         self.previous_poses.clear();
         self.export();

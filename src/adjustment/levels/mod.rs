@@ -32,7 +32,7 @@ use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
     triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
-} plain { settle_rate, #[cfg(test)] walk_share });
+} plain { #[cfg(test)] walk_share, #[cfg(test)] pairs_only });
 
 #[cfg(test)]
 mod tests;
@@ -51,10 +51,10 @@ const CHUNKS_PER_THREAD: usize = 4;
 /// ahead.
 const WALK_SHARE: usize = 64;
 
-/// How a run visits feathers one after another along the order, and
-/// where it finds what lies on a feather it changed.
+/// How a serial run (one feather after another along the order, not by
+/// levels) finds what lies on a feather it changed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Walk {
+enum SerialWalk {
     /// Over symmetric candidate rows (a step's second pass): the later
     /// feathers of a feather's own row.
     Symmetric,
@@ -113,8 +113,6 @@ pub struct Adjuster {
     levels: Csr<u32>,
     outcomes: Vec<Visit>,
     workers: Vec<Worker>,
-    /// The settle rate of the next run only (see [`Adjuster::settle_next_run`]).
-    settle_rate: f32,
     /// Which feathers the last run held back from their solved pose.
     settling: Vec<bool>,
     /// Verifying (not sparse): the suspects checked ahead of the ordered
@@ -131,6 +129,10 @@ pub struct Adjuster {
     /// never does).
     #[cfg(test)]
     walk_share: Option<usize>,
+    /// Tests only: verifies with the pairs only (or with every check)
+    /// whether the run is sparse or not.
+    #[cfg(test)]
+    pairs_only: Option<bool>,
 }
 
 impl Adjuster {
@@ -150,27 +152,10 @@ impl Adjuster {
         &self.verified
     }
 
-    /// The next run (only) moves each adjusted feather from its current
-    /// pose toward its solved pose by at most `rate` radians in pitch, roll
-    /// and each bend, when that pose passes the exact checks; otherwise it
-    /// lifts it from there by the smallest of a few pitch steps that
-    /// passes, else takes the solved pose (see
-    /// [`crate::animation::coherence`]). 0 takes the solved pose.
-    pub fn settle_next_run(&mut self, rate: f32) {
-        self.settle_rate = rate;
-    }
-
     /// Which feathers the last run held back from their solved pose (they
     /// settle further in later frames).
     pub fn settling(&self) -> &[bool] {
         &self.settling
-    }
-
-    /// Replaces what [`adjusted`](Self::adjusted) reports, e.g. with the
-    /// flags saved with a frame that is being resumed.
-    pub fn set_adjusted(&mut self, flags: &[bool]) {
-        self.adjusted.clear();
-        self.adjusted.extend_from_slice(flags);
     }
 
     /// Room in every worker for `longest` obstacles, so that a later call
@@ -215,7 +200,7 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
-        self.ordered_run(run, poses, selection, keep_going, (false, false))
+        self.ordered_run(run, poses, selection, keep_going, false)
     }
 
     /// As [`Adjuster::adjust_in_order_until`], one feather after the other
@@ -239,11 +224,11 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
-        self.ordered_run(run, poses, selection, keep_going, (true, true))
+        self.ordered_run(run, poses, selection, keep_going, true)
     }
 
     /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
-    /// `sparse`, verifying with every check or the pairs only (see
+    /// `sparse` (verifying with the pairs only, see
     /// [`Adjuster::adjust_sparse_until`]).
     fn ordered_run(
         &mut self,
@@ -251,11 +236,10 @@ impl Adjuster {
         poses: &mut [FeatherPose],
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
-        (sparse, pairs_only): (bool, bool),
+        sparse: bool,
     ) -> Option<AdjustStats> {
-        let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps } = *run;
+        let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps, settle_rate } = *run;
         let start = Instant::now();
-        let settle_rate = std::mem::take(&mut self.settle_rate);
         let n = frames.len();
         assert!(
             shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.rows() == n,
@@ -307,7 +291,7 @@ impl Adjuster {
             params,
             steps,
             selection,
-            pairs_only,
+            pairs_only: self.pairs_only_or(sparse),
             settle_rate,
             keep_going,
         };
@@ -319,7 +303,7 @@ impl Adjuster {
         // (thousands of them, most holding a feather or two). Either way
         // gives the same poses; the choice depends on the checks' answers
         // only, never on the thread count.
-        let mut walk = sparse.then_some(Walk::Symmetric);
+        let mut walk = sparse.then_some(SerialWalk::Symmetric);
         if !sparse && let Selection::Verify { seeds, .. } = selection {
             self.mark_selected(n, selection);
             self.precheck(&inputs, order, poses);
@@ -331,11 +315,11 @@ impl Adjuster {
             let share = WALK_SHARE;
             if to_adjust.saturating_mul(share) < n {
                 self.transpose(candidates);
-                walk = Some(Walk::Transposed);
+                walk = Some(SerialWalk::Transposed);
             }
         }
         if let Some(walk) = walk {
-            if walk == Walk::Symmetric {
+            if walk == SerialWalk::Symmetric {
                 self.mark_selected(n, selection);
             }
             for (k, &i) in order.iter().enumerate() {
@@ -353,8 +337,8 @@ impl Adjuster {
                 if self.changed[i] {
                     // What lies on it may now meet it or stand on nothing.
                     let dependents = match walk {
-                        Walk::Symmetric => candidates.row(i),
-                        Walk::Transposed => self.dependents.row(i),
+                        SerialWalk::Symmetric => candidates.row(i),
+                        SerialWalk::Transposed => self.dependents.row(i),
                     };
                     for &j in dependents {
                         if rank[j as usize] > rank[i] {
@@ -364,9 +348,9 @@ impl Adjuster {
                 }
             }
             stats.levels = match walk {
-                Walk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
+                SerialWalk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
                 // The checks ahead, then one feather adjusted after another.
-                Walk::Transposed => 1 + stats.adjusted,
+                SerialWalk::Transposed => 1 + stats.adjusted,
             };
             stats.seconds = start.elapsed().as_secs_f64();
             return Some(stats);
@@ -625,6 +609,16 @@ impl Adjuster {
         levels
     }
 
+    /// Whether verification tests the pairs only: in a sparse run (see
+    /// [`Adjuster::adjust_sparse_until`]), unless a test says otherwise.
+    fn pairs_only_or(&self, sparse: bool) -> bool {
+        #[cfg(test)]
+        if let Some(pairs_only) = self.pairs_only {
+            return pairs_only;
+        }
+        sparse
+    }
+
     /// One scratch per possible work chunk of the current pool.
     fn prepare_workers(&mut self, params: &AdjustParams) {
         let wanted = rayon::current_num_threads().max(1) * CHUNKS_PER_THREAD;
@@ -641,8 +635,9 @@ impl Adjuster {
 /// What an ordered run reads: every feather's root frame and shape, the
 /// adjustment `order` (`order[k]` is the k-th feather; `rank` is its
 /// inverse), each feather's `candidates` (roots within reach; its obstacles
-/// are those of smaller rank), the body, and the adjustment's parameters
-/// and steps. One entry per feather in each slice and row list.
+/// are those of smaller rank), the body, the adjustment's parameters and
+/// steps, and the settle rate. One entry per feather in each slice and row
+/// list.
 #[derive(Clone, Copy)]
 pub struct OrderedRun<'a> {
     pub frames: &'a [RootFrame],
@@ -653,6 +648,12 @@ pub struct OrderedRun<'a> {
     pub body: &'a BodyIndex,
     pub params: &'a AdjustParams,
     pub steps: AdjustSteps,
+    /// Radians: each adjusted feather moves from its current pose toward
+    /// its solved pose by at most this in pitch, roll and each bend, when
+    /// that pose passes the exact checks; otherwise it lifts from there by
+    /// the smallest of a few pitch steps that passes, else takes the solved
+    /// pose (see [`crate::animation::coherence`]). 0 takes the solved pose.
+    pub settle_rate: f32,
 }
 
 /// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or

@@ -32,7 +32,6 @@ impl TwoFeathers {
     /// Adjusts the selected feathers with `adjuster`, settling at `rate`.
     fn run(&self, adjuster: &mut Adjuster, poses: &mut [FeatherPose], selection: Selection<'_>, rate: f32) {
         let (offsets, indices) = ([0u32, 1, 2], [1u32, 0]);
-        adjuster.settle_next_run(rate);
         adjuster.adjust_in_order(
             &OrderedRun {
                 frames: &self.frames,
@@ -43,6 +42,7 @@ impl TwoFeathers {
                 body: &self.body,
                 params: &self.params,
                 steps: AdjustSteps::Full,
+                settle_rate: rate,
             },
             poses,
             selection,
@@ -222,6 +222,7 @@ fn a_sparse_run_matches_the_levels() {
         body: &body,
         params: &params,
         steps: AdjustSteps::Full,
+        settle_rate: 0.0,
     };
     // The earlier candidates alone, as a frame's obstacle rows hold them
     // (a relation that is not symmetric).
@@ -253,9 +254,10 @@ fn a_sparse_run_matches_the_levels() {
             Selection::Propagate { seeds: &seeds, threshold },
         ] {
             let run_on = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, walk_share: usize| {
-                let mut adjuster = Adjuster { walk_share: Some(walk_share), ..Adjuster::new() };
+                let mut adjuster =
+                    Adjuster { walk_share: Some(walk_share), pairs_only: Some(pairs_only), ..Adjuster::new() };
                 let mut poses = poses.clone();
-                let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, (sparse, pairs_only)).unwrap();
+                let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, sparse).unwrap();
                 (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
             };
             let run = |sparse: bool, pairs_only: bool| run_on(&ordered, sparse, pairs_only, usize::MAX);

@@ -110,7 +110,7 @@ pub(super) struct Inputs<'a> {
     pub(super) selection: Selection<'a>,
     /// Verification tests the pairs only (see [`super::Adjuster::adjust_sparse_until`]).
     pub(super) pairs_only: bool,
-    /// See [`super::Adjuster::settle_next_run`]; 0 = the solved poses.
+    /// See [`super::OrderedRun::settle_rate`]; 0 = the solved poses.
     pub(super) settle_rate: f32,
     /// Asked (with the share done) between feathers; once it says stop,
     /// the run is abandoned and its remaining feathers are not visited.
@@ -126,7 +126,7 @@ pub(super) enum Visit {
     Verified,
     /// It was adjusted: the pose it takes, and the pose solved for it
     /// (the same unless it settles toward it, see
-    /// [`super::Adjuster::settle_next_run`]).
+    /// [`super::OrderedRun::settle_rate`]).
     Adjusted(AdjustOutcome, FeatherPose),
 }
 
