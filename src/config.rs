@@ -220,22 +220,23 @@ macro_rules! define_config {
             /// order: (name, value, whether it is a length bounded by
             /// `MAX_COORDINATE`).
             fn nonnegative_fields(&self) -> Vec<(&'static str, f32, bool)> {
-                let mut fields = Vec::new();
-                $(check_field!($check, fields, $name, self.$name);)*
-                fields
+                [$(check_field!($check, $name, self.$name)),*].into_iter().flatten().collect()
             }
         }
     };
 }
 
-/// One entry of [`Config::nonnegative_fields`], by its `check` kind.
+/// One entry of [`Config::nonnegative_fields`], by its `check` kind (none
+/// for `none`).
 macro_rules! check_field {
-    (none, $fields:ident, $name:ident, $value:expr) => {};
-    (nonneg, $fields:ident, $name:ident, $value:expr) => {
-        $fields.push((stringify!($name), $value, false))
+    (none, $name:ident, $value:expr) => {
+        None
     };
-    (length, $fields:ident, $name:ident, $value:expr) => {
-        $fields.push((stringify!($name), $value, true))
+    (nonneg, $name:ident, $value:expr) => {
+        Some((stringify!($name), $value, false))
+    };
+    (length, $name:ident, $value:expr) => {
+        Some((stringify!($name), $value, true))
     };
 }
 
