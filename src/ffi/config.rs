@@ -424,7 +424,7 @@ pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<HostConfig
     // SAFETY: forwarded contract.
     let raw = unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?;
     let parallel_for = raw.parallel_for.map(|run| {
-        Arc::new(HostParallelFor { run, context: raw.parallel_for_context }) as Arc<dyn crate::pool::ParallelFor>
+        Arc::new(HostParallelFor { run, context: raw.parallel_for_context }) as Arc<dyn crate::workers::ParallelFor>
     });
     Ok(HostConfig { config: raw.to_config()?, progress: HostProgress::from_config(&raw), parallel_for })
 }
@@ -433,10 +433,10 @@ pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<HostConfig
 pub(crate) struct HostConfig {
     pub config: Config,
     pub progress: Option<HostProgress>,
-    pub parallel_for: Option<Arc<dyn crate::pool::ParallelFor>>,
+    pub parallel_for: Option<Arc<dyn crate::workers::ParallelFor>>,
 }
 
-/// The host's parallel-for as the pools' [`crate::pool::ParallelFor`].
+/// The host's parallel-for as the pools' [`crate::workers::ParallelFor`].
 #[derive(Debug)]
 struct HostParallelFor {
     run: unsafe extern "C" fn(*mut c_void, u32, PlumageTaskFn, *mut c_void),
@@ -450,7 +450,7 @@ unsafe impl Send for HostParallelFor {}
 
 unsafe impl Sync for HostParallelFor {}
 
-impl crate::pool::ParallelFor for HostParallelFor {
+impl crate::workers::ParallelFor for HostParallelFor {
     fn parallel_for(&self, count: usize, task: &(dyn Fn(usize) + Sync)) {
         /// What a `PlumageTaskFn` calls: the pool's task behind `context`.
         unsafe extern "C" fn trampoline(context: *mut c_void, index: u32) {

@@ -12,11 +12,11 @@ use crate::frame::{StepWorkspace, Workspace};
 use crate::geometry::RootFrame;
 use crate::memory::MemoryUse;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
-use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
 use crate::sampling::plant_roots_with_progress;
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport};
 use crate::surface::Surface;
+use crate::workers::WorkerPool;
 use glam::Vec3;
 use std::collections::BTreeMap;
 
@@ -72,12 +72,12 @@ impl System {
 
     /// As [`System::new_with_progress`]; with `parallel_for`, every parallel
     /// section of this system runs through the host's parallel-for,
-    /// `config.threads` tasks at a time (see [`crate::pool`]).
+    /// `config.threads` tasks at a time (see [`crate::workers`]).
     pub fn new_with_parallel_for(
         config: &Config,
         mesh: &MeshInput<'_>,
         progress: &Progress,
-        parallel_for: Option<std::sync::Arc<dyn crate::pool::ParallelFor>>,
+        parallel_for: Option<std::sync::Arc<dyn crate::workers::ParallelFor>>,
     ) -> Result<Self> {
         config.validate()?;
         progress.check(Phase::Preparing, 0.0)?;
