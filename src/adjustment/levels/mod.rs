@@ -34,15 +34,15 @@ crate::memory::heap_size_of_fields!(Adjuster {
     triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
 } plain { #[cfg(test)] walk_share, #[cfg(test)] pairs_only });
 
+mod scope;
 #[cfg(test)]
 mod tests;
 mod visit;
+mod walk;
 
 use super::settle::tip_above;
 pub use visit::Selection;
-use visit::{
-    Inputs, Level, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level,
-};
+use visit::{Inputs, Precheck, Visit, Worker};
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
@@ -240,6 +240,40 @@ impl Adjuster {
     ) -> Option<AdjustStats> {
         let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps, settle_rate } = *run;
         let start = Instant::now();
+        self.begin_run(run, poses, selection, keep_going)?;
+        let inputs = Inputs {
+            frames,
+            shapes,
+            rank,
+            candidates,
+            body,
+            params,
+            steps,
+            selection,
+            pairs_only: self.pairs_only_or(sparse),
+            settle_rate,
+            keep_going,
+        };
+        let mut stats = AdjustStats::default();
+        match self.choose_walk(&inputs, order, poses, sparse) {
+            Some(walk) => self.walk_serially(walk, &inputs, order, poses, &mut stats)?,
+            None => self.walk_levels(&inputs, order, poses, &mut stats)?,
+        }
+        stats.seconds = start.elapsed().as_secs_f64();
+        Some(stats)
+    }
+
+    /// Checks the run's inputs agree in length, poses every feather, and
+    /// readies the workers and the per-feather marks; `None` when
+    /// `keep_going` said stop.
+    fn begin_run(
+        &mut self,
+        run: &OrderedRun<'_>,
+        poses: &[FeatherPose],
+        selection: Selection<'_>,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
+    ) -> Option<()> {
+        let OrderedRun { frames, shapes, order, rank, candidates, body, params, .. } = *run;
         let n = frames.len();
         assert!(
             shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.rows() == n,
@@ -270,173 +304,13 @@ impl Adjuster {
         self.workers
             .iter_mut()
             .for_each(|w| w.field.body_scratch.ids.reserve(triangles.saturating_sub(w.field.body_scratch.ids.len())));
-        self.moved.clear();
-        self.moved.resize(n, false);
-        self.changed.clear();
-        self.changed.resize(n, false);
-        self.adjusted.clear();
-        self.adjusted.resize(n, false);
-        self.verified.clear();
-        self.verified.resize(n, false);
-        self.settling.clear();
-        self.settling.resize(n, false);
-
-        let mut stats = AdjustStats::default();
-        let inputs = Inputs {
-            frames,
-            shapes,
-            rank,
-            candidates,
-            body,
-            params,
-            steps,
-            selection,
-            pairs_only: self.pairs_only_or(sparse),
-            settle_rate,
-            keep_going,
-        };
+        for flags in [&mut self.moved, &mut self.changed, &mut self.adjusted, &mut self.verified, &mut self.settling] {
+            flags.clear();
+            flags.resize(n, false);
+        }
         self.prechecked.clear();
         self.prechecked.resize(n, Precheck::None);
-        // Verifying by levels, the suspects are checked ahead first; when
-        // that leaves few feathers to adjust, a walk along the order that
-        // visits only them and what they change costs less than the levels
-        // (thousands of them, most holding a feather or two). Either way
-        // gives the same poses; the choice depends on the checks' answers
-        // only, never on the thread count.
-        let mut walk = sparse.then_some(SerialWalk::Symmetric);
-        if !sparse && let Selection::Verify { seeds, .. } = selection {
-            self.mark_selected(n, selection);
-            self.precheck(&inputs, order, poses);
-            let blocked = self.prechecked.iter().filter(|&&p| p == Precheck::Blocked).count();
-            let to_adjust = seeds.iter().filter(|&&s| s).count() + blocked;
-            #[cfg(test)]
-            let share = self.walk_share.unwrap_or(WALK_SHARE);
-            #[cfg(not(test))]
-            let share = WALK_SHARE;
-            if to_adjust.saturating_mul(share) < n {
-                self.transpose(candidates);
-                walk = Some(SerialWalk::Transposed);
-            }
-        }
-        if let Some(walk) = walk {
-            if walk == SerialWalk::Symmetric {
-                self.mark_selected(n, selection);
-            }
-            for (k, &i) in order.iter().enumerate() {
-                if k % 16 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
-                    return None;
-                }
-                let i = i as usize;
-                if !self.in_scope[i] {
-                    continue;
-                }
-                let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-                let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
-                self.apply(i, &visit, &inputs, poses, &mut stats);
-                if self.changed[i] {
-                    // What lies on it may now meet it or stand on nothing.
-                    let dependents = match walk {
-                        SerialWalk::Symmetric => candidates.row(i),
-                        SerialWalk::Transposed => self.dependents.row(i),
-                    };
-                    for &j in dependents {
-                        if rank[j as usize] > rank[i] {
-                            self.in_scope[j as usize] = true;
-                        }
-                    }
-                }
-            }
-            stats.levels = match walk {
-                SerialWalk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
-                // The checks ahead, then one feather adjusted after another.
-                SerialWalk::Transposed => 1 + stats.adjusted,
-            };
-            stats.seconds = start.elapsed().as_secs_f64();
-            return Some(stats);
-        }
-        self.mark_scope(order, rank, candidates, selection);
-        if !keep_going(0.0) {
-            return None;
-        }
-        stats.levels = self.assign_levels(order, rank, candidates);
-        let levels = stats.levels;
-        for l in 0..levels {
-            if !keep_going(l as f32 / levels.max(1) as f32) {
-                return None;
-            }
-            let items = self.levels.row(l);
-            let outcomes = &mut self.outcomes[..items.len()];
-            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-            let done = l as f32 / levels.max(1) as f32;
-            run_level(&inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
-            // A level cut short left some outcomes unvisited: nothing is applied.
-            if !keep_going(done) {
-                return None;
-            }
-            for k in 0..self.levels.row(l).len() {
-                let (i, outcome) = (self.levels.row(l)[k] as usize, self.outcomes[k]);
-                self.apply(i, &outcome, &inputs, poses, &mut stats);
-            }
-        }
-        stats.seconds = start.elapsed().as_secs_f64();
-        Some(stats)
-    }
-
-    /// Verifying: checks every suspect that is not a seed (those the
-    /// ordered pass will most likely only check) ahead, in parallel chunks,
-    /// against the poses before the pass. Most checked feathers have no
-    /// obstacle that the pass changes before their turn, and their level
-    /// then takes this answer instead of checking again; it is the answer
-    /// the check would give there (same pose, same obstacles, same body),
-    /// so the result does not change, at any thread count. This spreads
-    /// the checks over the threads whatever the levels are: the obstacle
-    /// relation runs through thousands of levels of a few feathers.
-    fn precheck(&mut self, inputs: &Inputs<'_>, order: &[u32], poses: &[FeatherPose]) {
-        let Selection::Verify { seeds, suspects, .. } = inputs.selection else { return };
-        // Sized for every feather up front: how many are checked ahead
-        // varies from frame to frame, and the heap must not creep up.
-        let n = order.len();
-        self.precheck_items.clear();
-        self.precheck_items.reserve(n);
-        self.precheck_outcomes.reserve(n.saturating_sub(self.precheck_outcomes.len()));
-        self.precheck_items.extend(order.iter().copied().filter(|&i| {
-            let i = i as usize;
-            self.in_scope[i] && suspects[i] && !seeds[i]
-        }));
-        let items = &self.precheck_items;
-        self.precheck_outcomes.clear();
-        self.precheck_outcomes.resize(items.len(), Precheck::None);
-        let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-        let chunk = items.len().div_ceil(self.workers.len()).max(1);
-        items
-            .par_chunks(chunk)
-            .zip(self.precheck_outcomes.par_chunks_mut(chunk))
-            .zip(self.workers.par_iter_mut())
-            .for_each(|((items, outcomes), worker)| {
-                for (k, (&i, out)) in items.iter().zip(outcomes.iter_mut()).enumerate() {
-                    // Stopped: the rest stay unchecked (the run is abandoned).
-                    if k % 16 == 0 && !(inputs.keep_going)(0.0) {
-                        break;
-                    }
-                    let i = i as usize;
-                    collect_obstacle_ids(inputs, i, posed, worker);
-                    *out =
-                        if check_clear(inputs, i, poses, posed, worker) { Precheck::Clear } else { Precheck::Blocked };
-                }
-            });
-        for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
-            self.prechecked[i as usize] = outcome;
-        }
-    }
-
-    /// The transpose of `candidates` into the dependents: row j lists the
-    /// feathers whose candidates list j, in increasing order.
-    fn transpose(&mut self, candidates: CsrView<'_, u32>) {
-        let n = candidates.rows();
-        let entries = || (0..n).flat_map(move |i| candidates.row(i).iter().map(move |&j| (j as usize, i as u32)));
-        self.dependents.rebuild(n, entries);
+        Some(())
     }
 
     /// Records what became of feather `i`; an adjusted feather takes its
@@ -490,18 +364,6 @@ impl Adjuster {
         stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
     }
 
-    /// The scope of a sparse run to begin with: the selected feathers.
-    fn mark_selected(&mut self, n: usize, selection: Selection<'_>) {
-        self.in_scope.clear();
-        match selection {
-            Selection::All => self.in_scope.resize(n, true),
-            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => self.in_scope.extend_from_slice(s),
-            Selection::Verify { seeds, suspects, .. } => {
-                self.in_scope.extend(seeds.iter().zip(suspects).map(|(&s, &v)| s | v))
-            }
-        }
-    }
-
     /// Every feather's triangles at its current pose, and their spheres.
     /// Every feather's triangles, bounding sphere and obstacle boxes at its
     /// pose; once `keep_going` says stop the rest are left (the run is
@@ -532,81 +394,6 @@ impl Adjuster {
                 *sphere = bounding_sphere(t);
                 *boxes = ObstacleBoxes::new(t, s.thickness);
             });
-    }
-
-    /// Marks the feathers that may be adjusted. With propagation that is
-    /// the seeds (and suspects) and everything downstream of them in the
-    /// obstacle relation.
-    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CsrView<'_, u32>, selection: Selection<'_>) {
-        let n = order.len();
-        self.in_scope.clear();
-        match selection {
-            Selection::All => self.in_scope.resize(n, true),
-            Selection::Subset(s) => self.in_scope.extend_from_slice(s),
-            Selection::Propagate { seeds, .. } | Selection::Verify { seeds, .. } => {
-                self.in_scope.extend_from_slice(seeds);
-                if let Selection::Verify { suspects, .. } = selection {
-                    self.in_scope.iter_mut().zip(suspects).for_each(|(s, &v)| *s |= v);
-                }
-                for &i in order {
-                    let i = i as usize;
-                    if !self.in_scope[i] {
-                        let ri = rank[i];
-                        self.in_scope[i] =
-                            candidates.row(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
-                    }
-                }
-            }
-        }
-    }
-
-    /// Levels of the feathers in scope and the per-level lists (each in
-    /// order). Returns the number of levels.
-    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CsrView<'_, u32>) -> usize {
-        let n = order.len();
-        self.level.clear();
-        self.level.resize(n, 0);
-        let mut levels = 0u32;
-        for &i in order {
-            let i = i as usize;
-            if !self.in_scope[i] {
-                continue;
-            }
-            let ri = rank[i];
-            let below = candidates
-                .row(i)
-                .iter()
-                .filter(|&&j| rank[j as usize] < ri)
-                .map(|&j| self.level[j as usize])
-                .max()
-                .unwrap_or(0);
-            self.level[i] = below + 1;
-            levels = levels.max(below + 1);
-        }
-        let levels = levels as usize;
-        // Level lists sized for the worst case (one feather per level, or
-        // all in one) from the start, so that sparse frames never grow them.
-        self.levels.reserve_rows(n);
-        self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
-        self.levels.begin(levels);
-        for &i in order {
-            let l = self.level[i as usize] as usize;
-            if l > 0 {
-                self.levels.count(l - 1);
-            }
-        }
-        self.levels.allocate();
-        for &i in order {
-            let l = self.level[i as usize] as usize;
-            if l > 0 {
-                self.levels.place(l - 1, i);
-            }
-        }
-        let widest = (0..levels).map(|l| self.levels.row(l).len()).max().unwrap_or(0);
-        if self.outcomes.len() < widest {
-            self.outcomes.resize(widest, Visit::Skipped);
-        }
-        levels
     }
 
     /// Whether verification tests the pairs only: in a sparse run (see

@@ -142,7 +142,7 @@ pub(super) struct Marks<'a> {
 
 /// Every feather's triangles at its current pose and a sphere around them.
 #[derive(Clone, Copy)]
-pub(super) struct Posed<'a> {
+pub(super) struct PosedGeometry<'a> {
     pub(super) triangles: &'a [FeatherTriangles],
     pub(super) spheres: &'a [(Vec3, f32)],
     pub(super) boxes: &'a [ObstacleBoxes],
@@ -165,7 +165,7 @@ pub(super) fn run_level(
     inputs: &Inputs<'_>,
     Level { items, done }: Level<'_>,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     marks: Marks<'_>,
     outcomes: &mut [Visit],
     workers: &mut [Worker],
@@ -202,7 +202,7 @@ pub(super) fn adjust_one(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     marks: Marks<'_>,
     worker: &mut Worker,
 ) -> Visit {
@@ -273,7 +273,7 @@ pub(super) fn adjust_one(
 
 /// Fills `worker.obstacle_ids` with feather `i`'s earlier candidates that
 /// may matter to it at some size and pose (see [`ObstacleReach`]).
-pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: Posed<'_>, worker: &mut Worker) {
+pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: PosedGeometry<'_>, worker: &mut Worker) {
     let ri = inputs.rank[i];
     let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacle_ids.clear();
@@ -299,7 +299,7 @@ pub(super) fn check_clear(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     worker: &mut Worker,
 ) -> bool {
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
