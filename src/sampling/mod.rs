@@ -18,6 +18,7 @@
 //! the samplers themselves are sequential, and no hash-map order reaches
 //! the output.
 
+mod disk;
 mod grid;
 mod guided;
 pub mod metrics;
@@ -35,8 +36,9 @@ use crate::progress::{Phase, Progress};
 use crate::rng::Rng;
 use crate::roots::{RootBinding, edge_basis_coordinates, root_id};
 use crate::surface::Surface;
+use disk::DiskSampler;
 use glam::Vec3;
-use pool::{DensityField, DiskSampler, MAX_POOL, SortedPool};
+use pool::{DensityField, MAX_POOL, SortedPool};
 use std::time::Instant;
 
 /// Root count aimed at when neither a spacing nor a target is given.
