@@ -172,6 +172,31 @@ fn a_bent_feather_follows_a_slowly_rising_obstacle_without_popping() {
     assert!(worst <= 4.0 * rise, "B changed by {:.2}° in one frame", worst.to_degrees());
 }
 
+/// `w × h` roots about a unit apart on a gently waving patch, pointing
+/// along x.
+fn wavy_patch(rng: &mut Rng, w: usize, h: usize) -> Vec<RootFrame> {
+    (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
+            let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
+            RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
+        })
+        .collect()
+}
+
+/// An order with the tips first (the feathers farther along x are
+/// earlier), and its ranks.
+fn tips_first(frames: &[RootFrame]) -> (Vec<u32>, Vec<u32>) {
+    let n = frames.len();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
+    let mut rank = vec![0u32; n];
+    for (k, &i) in order.iter().enumerate() {
+        rank[i as usize] = k as u32;
+    }
+    (order, rank)
+}
+
 /// A sparse run gives the poses, adjusted and verified flags of a run
 /// by levels over the same symmetric candidates; by levels, the checks
 /// made ahead on several threads change nothing either, nor does a
@@ -179,14 +204,7 @@ fn a_bent_feather_follows_a_slowly_rising_obstacle_without_popping() {
 #[test]
 fn a_sparse_run_matches_the_levels() {
     let mut rng = Rng::new(7);
-    let (w, h) = (14, 10);
-    let frames: Vec<RootFrame> = (0..w * h)
-        .map(|k| {
-            let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
-            let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
-            RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
-        })
-        .collect();
+    let frames = wavy_patch(&mut rng, 14, 10);
     let n = frames.len();
     let shapes = vec![FeatherShape::for_spacing(1.0); n];
     let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
@@ -194,13 +212,7 @@ fn a_sparse_run_matches_the_levels() {
     nb.rebuild(&frames, &reach, &NeighbourParams::default());
     let (offsets, indices) = nb.obstacle_csr();
     let candidates = CsrView::new(offsets, indices);
-    // Tips first: the feathers farther along x are earlier.
-    let mut order: Vec<u32> = (0..n as u32).collect();
-    order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
-    let mut rank = vec![0u32; n];
-    for (k, &i) in order.iter().enumerate() {
-        rank[i as usize] = k as u32;
-    }
+    let (order, rank) = tips_first(&frames);
     let body = BodyIndex::from_mesh(
         &[
             Vec3::new(-5.0, -5.0, -0.05),
