@@ -13,11 +13,11 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use plumage::Config;
 use plumage::adjustment::{
-    AdjustParams, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, OrderedRun, Selection,
-    adjust_feather,
+    AdjustParams, AdjustSteps, Adjuster, HeightField, ObstacleFeather, OrderedRun, Selection, adjust_feather,
 };
 use plumage::body::BodyIndex;
 use plumage::coat::{Coat, Dressing};
+use plumage::csr::CsrView;
 use plumage::feather::{FeatherPose, FeatherShape, feather_triangles};
 use plumage::field::{Fields, VertexMaps};
 use plumage::frame::{Workspace, solve};
@@ -103,10 +103,11 @@ impl Scene {
                 shapes: &self.shapes,
                 order: &self.order,
                 rank: &self.rank,
-                candidates: CandidateLists::new(&self.offsets, &self.candidates),
+                candidates: CsrView::new(&self.offsets, &self.candidates),
                 body: &self.body,
                 params: &self.params,
                 steps: AdjustSteps::Full,
+                settle_rate: 0.0,
             },
             poses,
             Selection::All,

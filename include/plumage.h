@@ -195,8 +195,8 @@
 #define PLUMAGE_PRESET_SCALES 1
 
 /**
- * `plumage_config_init_preset`: the same as `PLUMAGE_PRESET_FEATHERS`
- * (the bent coat's name while the rigid kite was the default).
+ * `plumage_config_init_preset`: another name for
+ * `PLUMAGE_PRESET_FEATHERS`, always with the same defaults.
  */
 #define PLUMAGE_PRESET_SLEEK 2
 

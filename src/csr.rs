@@ -8,8 +8,84 @@
 //! walks its own structures: [`Csr::begin`], [`Csr::count`] for every item,
 //! [`Csr::allocate`], then [`Csr::place`] for the same items in the order
 //! they should keep.
+//!
+//! [`CsrView`] is the borrowed form (a `Csr`'s [`view`](Csr::view), or
+//! offsets and items held elsewhere): what readers of rows take.
 
 use std::ops::Range;
+
+/// Compressed rows held elsewhere, borrowed: row `r` is
+/// `items[offsets[r]..offsets[r + 1]]`.
+#[derive(Debug)]
+pub struct CsrView<'a, T> {
+    offsets: &'a [u32],
+    items: &'a [T],
+}
+
+impl<T> Clone for CsrView<'_, T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for CsrView<'_, T> {}
+
+impl<'a, T> CsrView<'a, T> {
+    /// Rows over `items` starting at `offsets` (one more offset than rows,
+    /// the last `items.len()`; or no offsets at all for no rows).
+    pub fn new(offsets: &'a [u32], items: &'a [T]) -> Self {
+        debug_assert!(offsets.last().map_or(items.is_empty(), |&end| end as usize == items.len()));
+        Self { offsets, items }
+    }
+
+    /// Row `r`'s items (`r` must be below [`rows`](Self::rows)).
+    #[inline]
+    pub fn row(&self, r: usize) -> &'a [T] {
+        &self.items[self.span(r)]
+    }
+
+    /// Where row `r`'s items lie in [`items`](Self::items) (`r` must be
+    /// below [`rows`](Self::rows)).
+    #[inline]
+    pub fn span(&self, r: usize) -> Range<usize> {
+        self.offsets[r] as usize..self.offsets[r + 1] as usize
+    }
+
+    /// Number of rows.
+    #[inline]
+    pub fn rows(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Every item, row after row.
+    #[inline]
+    pub fn items(&self) -> &'a [T] {
+        self.items
+    }
+
+    /// The row offsets.
+    #[inline]
+    pub fn offsets(&self) -> &'a [u32] {
+        self.offsets
+    }
+
+    /// Number of items in all rows.
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Whether no row holds an item.
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+}
+
+impl<'a, T> From<(&'a [u32], &'a [T])> for CsrView<'a, T> {
+    /// From a pair `(offsets, items)`.
+    fn from((offsets, items): (&'a [u32], &'a [T])) -> Self {
+        Self::new(offsets, items)
+    }
+}
 
 /// Items grouped by row (module notes).
 #[derive(Clone, Debug, Default)]
@@ -34,6 +110,12 @@ impl<T: Copy + Default> Csr<T> {
         entries().into_iter().for_each(|(r, _)| self.count(r));
         self.allocate();
         entries().into_iter().for_each(|(r, item)| self.place(r, item));
+    }
+
+    /// Room for builds of up to `rows` rows without allocating.
+    pub fn reserve_rows(&mut self, rows: usize) {
+        self.offsets.reserve((rows + 1).saturating_sub(self.offsets.len()));
+        self.cursor.reserve(rows.saturating_sub(self.cursor.len()));
     }
 
     /// First pass of a build: `rows` empty rows, every count 0.
@@ -117,6 +199,20 @@ impl<T: Copy + Default> Csr<T> {
     pub fn is_empty(&self) -> bool {
         self.items.is_empty()
     }
+
+    /// The rows, borrowed.
+    #[inline]
+    pub fn view(&self) -> CsrView<'_, T> {
+        CsrView::new(&self.offsets, &self.items)
+    }
+
+    /// Becomes a copy of `rows` (reusing the buffers).
+    pub fn copy_from(&mut self, rows: CsrView<'_, T>) {
+        self.offsets.clear();
+        self.offsets.extend_from_slice(rows.offsets());
+        self.items.clear();
+        self.items.extend_from_slice(rows.items());
+    }
 }
 
 impl<T: Copy> crate::memory::HeapSize for Csr<T> {
@@ -152,5 +248,23 @@ mod tests {
         csr.row_mut(1)[0] = 'y';
         assert_eq!(csr.items(), &['y']);
         assert!(Csr::<u32>::new().row(0).is_empty() && Csr::<u32>::new().rows() == 0);
+    }
+
+    #[test]
+    fn a_view_reads_the_rows_it_borrows() {
+        let mut csr = Csr::new();
+        csr.rebuild(3, || [(2, 7u32), (0, 5), (2, 9)]);
+        let view = csr.view();
+        assert_eq!(
+            (view.rows(), view.len(), view.row(0), view.row(1), view.row(2)),
+            (3, 3, &[5][..], &[][..], &[7, 9][..])
+        );
+        assert_eq!(view.span(2), 1..3);
+        let mut copy = Csr::new();
+        copy.copy_from(view);
+        assert_eq!((copy.offsets(), copy.items()), (csr.offsets(), csr.items()));
+        let empty = CsrView::<u32>::new(&[], &[]);
+        assert_eq!((empty.rows(), empty.is_empty()), (0, true));
+        assert_eq!(CsrView::from((&[0, 1][..], &[4u32][..])).row(0), &[4]);
     }
 }

@@ -80,8 +80,8 @@ impl<'a> BodyInterior<'a> {
     /// compared (they touch by construction). Each face is judged on its
     /// own: joining faces into patches by their edges would be cheaper, but
     /// the test models' skins pass through themselves next to shared
-    /// corners too, and patches then mixed inside and outside (the bird's
-    /// coverage fell from 0.880 to 0.864).
+    /// corners too, and patches then mixed inside and outside (coverage
+    /// fell: BENCHMARKS.md, "Measurements behind the code's constants").
     pub fn face_burials(&self, triangles: &[[u32; 3]]) -> Vec<FaceBurial> {
         self.face_burials_within(triangles, &WorkBudget::unlimited())
     }

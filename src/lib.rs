@@ -27,7 +27,6 @@ pub mod limits;
 pub mod memory;
 pub mod mesh;
 pub mod ordering;
-pub mod pool;
 pub mod progress;
 pub mod rng;
 pub mod roots;
@@ -40,6 +39,7 @@ pub mod surface;
 pub mod system;
 pub mod triangle_grid;
 pub mod validation;
+pub mod workers;
 
 pub use config::{Config, Mode, Preset, SamplerKind};
 pub use error::{Error, ErrorKind, Result};

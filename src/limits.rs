@@ -11,10 +11,11 @@ pub const MAX_FEATHERS: usize = 2_000_000;
 
 /// Largest coordinate magnitude accepted in a mesh or a frame, and largest
 /// length accepted in the configuration (spacing, feather length, width and
-/// thickness), in model units (a spacing of f32::MAX gave NaN feathers). Squared cross products of triangle edges (normals, areas) are
-/// computed in f32: with coordinates beyond about 1e10 they overflow and
-/// the surface can no longer be used (measured: a cylinder scaled by 1e11
-/// gave one feather after 10 s and 880 MB). Meshes so small that their
+/// thickness), in model units (a spacing of f32::MAX gave NaN feathers).
+/// Squared cross products of triangle edges (normals, areas) are computed
+/// in f32: with coordinates beyond about 1e10 they overflow and the surface
+/// can no longer be used (a cylinder scaled by 1e11 gave one feather after
+/// 10 s and 880 MB). Meshes so small that their
 /// triangles' areas underflow (about 1e-10 model units across) are refused
 /// as degenerate.
 pub const MAX_COORDINATE: f32 = 1e9;
@@ -22,15 +23,12 @@ pub const MAX_COORDINATE: f32 = 1e9;
 /// Positive per-vertex multipliers (a spacing map times the curvature
 /// refinement; length and width maps) are clamped to within this factor of
 /// their median either way: a density ratio of 400 at most from the
-/// median. Far wider ratios made the sampler's rejection and coverage queries run for minutes
-/// (found by `fuzz_create`: one vertex at 1e-20 took 75 s for 300
-/// feathers) and a huge length multiplier gave NaN feathers (fuzz_create
-/// case 3000). The sampler's cost grows steeply with the ratio where one
+/// median. Far wider ratios made the sampler's rejection and coverage
+/// queries run for minutes, and a huge length multiplier gave NaN
+/// feathers. The sampler's cost grows steeply with the ratio where one
 /// vertex's multiplier is far below its neighbours' (its faces draw pool
-/// points from their densest corner and reject the rest): the 100 000-case
-/// run of session 10 (seed 2026) found a three-sided tube of 24 triangles
-/// with one vertex at 3·10⁻³⁹ (case 47281, 94 feathers requested) taking
-/// 12.4 s alone at a ratio of 100, 3.9 s at 50, 1.5 s at 30 and 0.25 s at
-/// 20 (case 63927: 8.1, 3.3, 1.2, 0.66 s). 20 either way still spans a
-/// density ratio of 160 000 between the sparsest and densest skin.
+/// points from their densest corner and reject the rest); at 20 the worst
+/// case `fuzz_create` found takes under a second (BENCHMARKS.md,
+/// "Measurements behind the code's constants"). 20 either way still spans
+/// a density ratio of 160 000 between the sparsest and densest skin.
 pub const MAX_MULTIPLIER_RATIO: f32 = 20.0;

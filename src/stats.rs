@@ -45,7 +45,7 @@ pub struct FrameReport {
     pub adjusted: usize,
     /// Feathers whose surroundings moved relative to them, since they were
     /// last adjusted, by more than θs times their length (the paper's `R_k`,
-    /// see `animation::step`).
+    /// see [`crate::frame::step_coat`]).
     pub deformed: usize,
     /// Feathers readjusted in any case: those whose surroundings moved by
     /// more than the drift tolerance times their length (θs in the paper's

@@ -5,10 +5,11 @@
 
 use glam::Vec3;
 use plumage::adjustment::{
-    AdjustParams, AdjustStats, AdjustSteps, Adjuster, CandidateLists, HeightField, ObstacleFeather, OrderedRun,
-    Selection, adjust_feather, adjust_in_order,
+    AdjustParams, AdjustStats, AdjustSteps, Adjuster, HeightField, ObstacleFeather, OrderedRun, Selection,
+    adjust_feather, adjust_in_order,
 };
 use plumage::body::BodyIndex;
+use plumage::csr::CsrView;
 use plumage::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use plumage::geometry::RootFrame;
 use plumage::rng::Rng;
@@ -183,8 +184,8 @@ impl Scene {
             .collect()
     }
 
-    fn lists(&self) -> CandidateLists<'_> {
-        CandidateLists::new(&self.offsets, &self.candidates)
+    fn lists(&self) -> CsrView<'_, u32> {
+        CsrView::new(&self.offsets, &self.candidates)
     }
 
     /// An ordered run over the scene with `params` and `steps`.
@@ -198,6 +199,7 @@ impl Scene {
             body: &self.body,
             params,
             steps,
+            settle_rate: 0.0,
         }
     }
 
@@ -561,7 +563,7 @@ fn levels_give_the_serial_result() {
         let i = i as usize;
         let obstacles: Vec<ObstacleFeather> = scene
             .lists()
-            .of(i)
+            .row(i)
             .iter()
             .map(|&j| j as usize)
             .filter(|&j| scene.rank[j] < scene.rank[i])
@@ -703,7 +705,7 @@ fn warm_scratch_allocates_nothing() {
     let obstacles_of = |i: usize| -> Vec<ObstacleFeather> {
         scene
             .lists()
-            .of(i)
+            .row(i)
             .iter()
             .map(|&j| j as usize)
             .filter(|&j| scene.rank[j] < scene.rank[i])

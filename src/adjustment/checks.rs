@@ -202,9 +202,7 @@ pub(crate) struct FeatherInPlace<'a> {
 }
 
 /// `pose_is_clear`, and with `tops` also clear of every [`raised_top`](super::obstacle::raised_top)
-/// (last: most poses that fail, fail before it; testing the tops before
-/// the body took 3 % more instructions in `adjust_feather` on the
-/// Flamingo bench).
+/// (last: most poses that fail, fail before it, so it is tested least).
 pub(super) fn exact_check(
     at: &FeatherInPlace<'_>,
     pose: FeatherPose,

@@ -30,7 +30,7 @@ mod steps;
 mod sweep;
 
 pub use height_field::HeightField;
-pub use levels::{AdjustStats, Adjuster, CandidateLists, OrderedRun, Selection, adjust_in_order};
+pub use levels::{AdjustStats, Adjuster, OrderedRun, Selection, adjust_in_order};
 pub use steps::adjust_feather;
 
 use crate::feather::{FeatherPose, FeatherTriangles};
@@ -59,12 +59,9 @@ pub const DEFAULT_BEND_LIMIT: f32 = 0.4;
 /// the default): a feather curls down over a rounded body or a wing's rim
 /// more readily than it rises over what lies beneath it (a real shaft is
 /// curved toward the skin). Three joints then curl a feather by up to
-/// about 140° down. Measured at rest (2000 feathers, S = 4, host
-/// defaults), against a symmetric limit: tip median Flamingo 0.227 ->
-/// 0.200, Fox 0.248 -> 0.218, bird 0.246 -> 0.230, built-in 0.212 ->
-/// 0.189; bristles 4.7 -> 3.5, 7.6 -> 4.2, 13.6 -> 11.5, 1.6 -> 1.0 %;
-/// coverage within 0.002. Three times went further (bristles 1.9, 3.4,
-/// 9.0, 0.7 %) with sharper kinks at the joints.
+/// about 140° down. Twice brings the tips closer to the skin than a
+/// symmetric limit without the sharp kinks of three times (BENCHMARKS.md,
+/// "Measurements behind the code's constants").
 pub const DOWN_BEND_PER_LIMIT: f32 = 2.0;
 
 /// Parameters of the height-field adjustment.

@@ -5,9 +5,8 @@
 //! through the root; over a horizontal point (x, y) of the root frame its
 //! height is `x·tan α + y·tan β / cos α`, and the kite point there has shaft
 //! coordinate `x0 = x / cos α + y0·sin β·tan α` and lateral coordinate
-//! `y0 = y / cos β`. Both are cheap, so the steps work in slopes
-//! (`p = tan α`, lateral slope `q = tan β / cos α`) and never need
-//! per-cell trigonometry.
+//! `y0 = y / cos β`. So the steps work in slopes (`p = tan α`, lateral
+//! slope `q = tan β / cos α`), with no per-cell trigonometry.
 //!
 //! Semantics (a height field is a "lid" problem). A cell constrains the
 //! feather only while the posed kite covers it (cell rounded outward by half
@@ -380,20 +379,13 @@ impl HeightField {
     /// unrolled one: the feather pivots down onto its free side and never
     /// lifts a vane corner above where step 1 put it.
     ///
-    /// Why the limit: followers lie over a feather's root region and vane
-    /// corners, so a raised corner is a step every later neighbour on that
-    /// side must climb. Measured on our test coats (staggered plane, sphere
-    /// of 600 and 2400 feathers) the mean pitch was 7.8°, 12.1° and 11.4°
-    /// with the limit; letting a corner rise by half a thickness, one, two
-    /// or without bound gave 9.3/10.5/12.3/12.8° on the plane and up to
-    /// 25° on the sphere (and intersections on a torus once unbounded).
-    /// Volume balance alone or "settling" until both vanes bear escalated
-    /// further (15–50°). So the roll only ever lowers the surface later
-    /// feathers see. A consequence of the kite's shape: the vane corner has
-    /// the largest lateral-to-shaft ratio of any covered point, so lowering
-    /// the pitch by rolling nearly always lifts the corner; rolls stay
-    /// small (tenths of a degree on flat skin, more on saddles and at vane
-    /// edges where cell rounding binds) and the step mostly refines.
+    /// Why: a raised corner is a step every later neighbour on that side
+    /// must climb (followers lie over a feather's root region and corners),
+    /// and the coat's pitch escalates (BENCHMARKS.md, "Measurements behind
+    /// the code's constants"). The vane corner has the largest
+    /// lateral-to-shaft ratio of any covered point, so rolls stay small
+    /// (tenths of a degree on flat skin, more on saddles and at vane edges
+    /// where cell rounding binds) and the step mostly refines.
     ///
     /// The rolled feather needs pitch slope `f(q)` at lateral slope `q`
     /// (the upper envelope of one constraint per covered cell, each linear

@@ -30,16 +30,10 @@ const REFILL_BELOW: f32 = 0.5;
 /// A pose chosen with the relaxed distance is kept only if the exact check
 /// passes and the feather also stays clear of every obstacle's top (see
 /// [`raised_top`](super::obstacle::raised_top)), so the thickness is still respected.
-///
-/// Measured with the exact sweep below (coverage, mean pitch): judging
-/// conservatively only, Flamingo 0.864/27.9°, Fox 0.953/30.2°, bird
-/// 0.830/29.9°; relaxed at 0.25: 0.875/26.8°, 0.959/28.9°, 0.854/26.1°
-/// (sphere and torus unchanged). Further out covers more (0.4: 0.885,
-/// 0.964, 0.867; 0.6: 0.894, 0.970, 0.880, sphere pitch down to 10°), but
-/// the tighter coat leaves less slack for motion: under the paper's rule
-/// (no exact checks while animating) the Flamingo clip then reaches 3 (0.4)
-/// or 4 to 6 (0.5, 0.6) intersecting pairs, against 2 at 0.25 and the
-/// 0.2 % (3 pairs) that tests/flamingo_clip.rs allows.
+/// Further out covers more, but the tighter coat leaves less slack for
+/// motion: under the paper's rule (no exact checks while animating) it
+/// then intersects (BENCHMARKS.md, "Measurements behind the code's
+/// constants").
 const RELAXED_JUDGE_FRACTION: f32 = 0.25;
 
 /// Adjusts one feather: rasterises its obstacles and the body near its root
@@ -131,8 +125,8 @@ fn straight_pose(
             // The conservative judging demands at least the relaxed pitch
             // of every cell, so after a relaxed pose too steep for the limit
             // it would stand too steep as well; go to the next size. (Not a
-            // proof once roll enters: the five test models' poses are the
-            // same with and without the retry; 3.9 % fewer instructions.)
+            // proof once roll enters: BENCHMARKS.md has what the retry
+            // changed.)
             if relaxed && choice.too_steep {
                 break;
             }
@@ -194,10 +188,8 @@ fn straight_pose(
 /// the highest, in even steps (3.9° with the default limits).
 const SWEEP_PITCHES: usize = 24;
 /// The highest pitch (radians, about 34°) at which the exact sweep may
-/// replace a shortened feather by a larger one. Measured (coverage of
-/// Flamingo, bird, torus): without the sweep for shortened feathers
-/// 0.875, 0.853, 0.981; up to 0.4 rad 0.887, 0.872, 0.987; up to 0.6 rad
-/// 0.891, 0.871, 0.989; up to the limit (1.1 rad) 0.890, 0.867, 0.989.
+/// replace a shortened feather by a larger one: the coverage gained levels
+/// off past it (BENCHMARKS.md, "Measurements behind the code's constants").
 const SWEEP_MAX_PITCH: f32 = 0.6;
 
 /// The first pose clear by the exact check alone (and clear of the
@@ -205,11 +197,8 @@ const SWEEP_MAX_PITCH: f32 = 0.6;
 /// `SHRINK_STEPS` larger than `smallest` (from full size), and at each
 /// the pitches from the lowest allowed up to `max_pitch` in the steps of
 /// `SWEEP_PITCHES`, unrolled.
-///
-/// Measured: of the feathers the height field left out (Flamingo ~130,
-/// mostly at the wing roots), most find a pose this way; coverage rose
-/// from 0.848 to 0.875 on the Flamingo, 0.959 to 0.981 on the torus, 0.850
-/// to 0.853 on the bird, with 0 intersecting pairs and penetrations.
+/// Most feathers the height field leaves out (mostly at wing roots) find
+/// a pose this way.
 fn exact_pitch_sweep(
     at: &FeatherInPlace<'_>,
     params: &AdjustParams,

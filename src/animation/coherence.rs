@@ -5,22 +5,16 @@
 //! each frame on its own is collision-free. The pose is relative to the
 //! root's frame, so a rigid motion of the body changes nothing here.
 //!
-//! Where the pops came from (built-in swim, 2 000 feathers, 60 frames,
-//! frame 0 included, incremental with the default drift tolerance, before
-//! any settling): 2.93 % of the feathers a frame, 3 512 pops in all. 54 %
-//! were drift re-seeds (feathers readjusted because their surroundings had
-//! drifted past the drift tolerance) jumping to their solved pose, three in
-//! four of them down (the snap back to the ideal pose); 46 % were feathers
-//! failing their exact check (an obstacle moved into them, or a reversal
-//! in the order gave them a new obstacle) and readjusted from scratch, six
-//! in seven of them up, often by far more than the collision needed. A
-//! feather pulled in only by propagation never popped, and 111 of the pops
-//! were rolls. The 2 057 priority reversals of the clip act only through
-//! those exact checks.
+//! A readjusted feather that jumps to its solved pose pops: a drift re-seed
+//! (its surroundings drifted past the drift tolerance) mostly snaps down
+//! to the ideal pose, and a feather failing its exact check (an obstacle
+//! moved into it, or a reversal in the order gave it a new obstacle) is
+//! solved afresh, mostly up and often by far more than the collision
+//! needed (BENCHMARKS.md, "Measurements behind the code's constants").
 //!
 //! So the incremental mode settles instead of snapping
 //! (`Config::settle_rate`, default 2° a frame; see
-//! [`crate::adjustment::Adjuster::settle_next_run`]): a readjusted
+//! [`crate::adjustment::OrderedRun::settle_rate`]): a readjusted
 //! feather moves from its current pose toward its solved pose by at most
 //! the rate in pitch, roll and each bend, if that pose passes the exact
 //! checks; if not, it lifts from there by the smallest clear step, and only
@@ -28,14 +22,8 @@
 //! every frame; a feather held back is readjusted again the next frame
 //! ([`crate::coat::Coat::settling`]) until it reaches its solved pose. Its
 //! obstacles' sinking is judged by the solved pose, so the feathers lying on
-//! a settling feather settle with it. Measured after (same clip): 0.17 %
-//! a frame over 60 frames (0.04 % checking held poses without the
-//! obstacles' tops, as now); over 600 frames 0.034 % a frame (max 0.30 %),
-//! 0 intersecting pairs, mean pitch at most 1.89° over rebuild's in any
-//! frame (without settling: 3.61 % pops, up to 3.10° over rebuild's, more
-//! than 2° in 360 frames). A lower drift tolerance tracks rebuild closer
-//! without popping now, at the cost of more readjustments: 10° up to
-//! 1.05°, 5° up to 0.40° (0.04 % pops either way).
+//! a settling feather settle with it. A lower drift tolerance then tracks
+//! rebuild closer without popping, at the cost of more readjustments.
 
 use crate::feather::{FeatherPose, pose_change};
 use crate::geometry::RootFrame;

@@ -21,6 +21,7 @@
 //! the frame can readjust the feathers concerned with their full lists.
 
 use crate::adjustment::AdjustParams;
+use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::progress::{Phase, Progress};
@@ -121,18 +122,6 @@ pub struct Posed<'a> {
     pub poses: &'a [FeatherPose],
 }
 
-/// The obstacle candidates (CSR rows: feather i's candidates are
-/// `indices[offsets[i]..offsets[i + 1]]`) and the order's rank of each feather.
-#[derive(Clone, Copy, Debug)]
-pub struct Candidates<'a> {
-    /// Row offsets, one more than there are feathers.
-    pub offsets: &'a [u32],
-    /// The candidates, row after row.
-    pub indices: &'a [u32],
-    /// Each feather's rank in the order.
-    pub rank: &'a [u32],
-}
-
 /// A feather's sphere centre and squared radii without and with the pose
 /// margin, packed for the candidate loop.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -202,11 +191,12 @@ impl Contacts {
         &mut self,
         feathers: Posed<'_>,
         params: &AdjustParams,
-        candidates: Candidates<'_>,
+        candidates: CsrView<'_, u32>,
+        rank: &[u32],
         progress: &Progress,
     ) {
         let Posed { frames, shapes, poses } = feathers;
-        let Candidates { offsets, indices, rank } = candidates;
+        let (offsets, indices) = (candidates.offsets(), candidates.items());
         let n = frames.len();
         if self.footprints.len() != n {
             self.footprints.clear();
@@ -267,13 +257,13 @@ impl Contacts {
     /// Fills the rows handed to the adjustment: the candidates of each
     /// feather that come earlier in the order (`rank`) and touch its
     /// footprint or come within the pose margin of it.
-    pub fn obstacle_rows(&mut self, candidates: Candidates<'_>) -> (&[u32], &[u32]) {
-        let Candidates { offsets, indices, rank } = candidates;
-        let n = offsets.len().saturating_sub(1);
+    pub fn obstacle_rows(&mut self, candidates: CsrView<'_, u32>, rank: &[u32]) -> CsrView<'_, u32> {
+        let (offsets, indices) = (candidates.offsets(), candidates.items());
+        let n = candidates.rows();
         self.offsets.clear();
         self.offsets.resize(n + 1, 0);
         if n == 0 {
-            return (&self.offsets, &[]);
+            return CsrView::new(&self.offsets, &[]);
         }
         // Sized for every candidate, so the buffer never creeps up with the
         // poses.
@@ -298,7 +288,7 @@ impl Contacts {
             let mut len = 0;
             for (i, length) in rows.zip(lengths.iter_mut()) {
                 let rank_i = rank[i];
-                let row = offsets[i] as usize..offsets[i + 1] as usize;
+                let row = candidates.span(i);
                 let before = len;
                 for (&j, t) in indices[row.clone()].iter().zip(&mut states[row.start - base..row.end - base]) {
                     let earlier = rank[j as usize] < rank_i;
@@ -325,7 +315,7 @@ impl Contacts {
             self.indices.copy_within(from..from + len, to);
         }
         let len = self.offsets[n] as usize;
-        (&self.offsets, &self.indices[..len])
+        CsrView::new(&self.offsets, &self.indices[..len])
     }
 
     /// After an adjustment with [`obstacle_rows`](Self::obstacle_rows):
@@ -334,9 +324,14 @@ impl Contacts {
     /// feather that left its sphere grown by the pose margin can do that
     /// (it turned by more than the margin). Returns how many were marked;
     /// [`missed_flags`](Self::missed_flags) holds them.
-    pub fn missed(&mut self, feathers: Posed<'_>, candidates: Candidates<'_>, adjusted: &[bool]) -> usize {
+    pub fn missed(
+        &mut self,
+        feathers: Posed<'_>,
+        candidates: CsrView<'_, u32>,
+        rank: &[u32],
+        adjusted: &[bool],
+    ) -> usize {
         let Posed { frames, shapes, poses } = feathers;
-        let Candidates { offsets, indices, rank } = candidates;
         let n = frames.len();
         self.missed.clear();
         self.missed.resize(n, false);
@@ -349,14 +344,14 @@ impl Contacts {
             }
             // The relation is symmetric: i is a candidate of j exactly when
             // j is one of i, so the entries (i, j) are found from row j.
-            for &i in &indices[offsets[j] as usize..offsets[j + 1] as usize] {
+            for &i in candidates.row(j) {
                 let i = i as usize;
                 if rank[i] <= rank[j] || self.missed[i] {
                     continue;
                 }
-                let row = offsets[i] as usize..offsets[i + 1] as usize;
+                let row = candidates.span(i);
                 let listed =
-                    indices[row.clone()].binary_search(&(j as u32)).is_ok_and(|k| self.touch[row.start + k] != APART);
+                    candidates.row(i).binary_search(&(j as u32)).is_ok_and(|k| self.touch[row.start + k] != APART);
                 if !listed && self.footprints[i].reached_by(&frames[i], now) {
                     self.missed[i] = true;
                     count += 1;
@@ -466,7 +461,7 @@ mod tests {
         let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
         let mut nb = Neighbourhoods::new();
         nb.rebuild(&frames, &reach, &NeighbourParams::default());
-        let (offsets, indices) = nb.obstacle_csr();
+        let candidates = CsrView::from(nb.obstacle_csr());
         let params = AdjustParams::default();
         // Two orders: by x, and by x with every other pair of neighbours swapped.
         let by_x: Vec<u32> = (0..n as u32).map(|i| (i % w as u32) * h as u32 + i / w as u32).collect();
@@ -474,9 +469,9 @@ mod tests {
         let rows = |first: &[u32], last: &[u32]| {
             let mut c = Contacts::default();
             let posed = Posed { frames: &frames, shapes: &shapes, poses: &poses };
-            c.update(posed, &params, Candidates { offsets, indices, rank: first }, &Progress::none());
-            let (o, i) = c.obstacle_rows(Candidates { offsets, indices, rank: last });
-            (o.to_vec(), i.to_vec())
+            c.update(posed, &params, candidates, first, &Progress::none());
+            let rows = c.obstacle_rows(candidates, last);
+            (rows.offsets().to_vec(), rows.items().to_vec())
         };
         let late = rows(&by_x, &swapped);
         assert_eq!(late, rows(&swapped, &swapped));

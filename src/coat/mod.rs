@@ -7,6 +7,7 @@
 use crate::Config;
 use crate::adjustment::AdjustParams;
 use crate::body::BodyIndex;
+use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, FeatherType, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::mesh::WeldedMesh;
@@ -55,7 +56,7 @@ pub struct Dressing {
     /// The connected part of the surface each triangle belongs to, and the
     /// number of parts ([`Surface::face_components`]): skin of another
     /// part near a feather is watched each frame (see
-    /// `animation::step`).
+    /// [`crate::frame::step_coat`]).
     pub face_part: Vec<u32>,
     pub parts: usize,
 }
@@ -157,6 +158,9 @@ pub struct Coat {
     /// incremental mode readjusts them again next frame (empty or all
     /// false after a solve).
     pub settling: Vec<bool>,
+    /// Which feathers the last create, step or evaluate readjusted (one
+    /// flag per feather; saved with the state).
+    pub readjusted: Vec<bool>,
     /// 0 after creation, then one more per step.
     pub frame_index: u64,
     /// Figures of the last static order.
@@ -166,6 +170,12 @@ pub struct Coat {
 }
 
 impl Coat {
+    /// The obstacle candidates of every feather (`Coat::neighbourhoods`):
+    /// row i lists, sorted, the roots within reach of root i.
+    pub fn obstacle_candidates(&self) -> CsrView<'_, u32> {
+        CsrView::from(self.neighbourhoods.obstacle_csr())
+    }
+
     /// Moves the coat to `positions` (welded) and re-poses every root.
     pub fn pose(&mut self, dressing: &Dressing, positions: &[Vec3]) {
         self.positions.clear();

@@ -18,11 +18,7 @@
 //!   back-and-forth cancels instead of counting twice. Surroundings that
 //!   joined since (new nearest roots, obstacles that came over the
 //!   footprint) are left to the exact checks, which test every feather
-//!   whose surroundings moved at all. On the Flamingo clip (2 000
-//!   feathers, default drift tolerance), net motion of everything recorded
-//!   when the feather was adjusted came to 85 % of the summed one, and
-//!   leaving the joined surroundings out took the drift seeds from 439 to
-//!   about 314 a frame and the readjustments from 688 to 587.
+//!   whose surroundings moved at all.
 
 use crate::error::{Error, ErrorKind, Result};
 use crate::geometry::RootFrame;
@@ -31,11 +27,11 @@ use glam::{Quat, Vec3};
 
 /// Recorded placements per feather (the k nearest first, then obstacles in
 /// index order; the rest are left to the exact checks like surroundings
-/// that joined later). On the Flamingo clip a footprint has k = 10 nearest
-/// roots and typically 30 to 60 earlier candidates over it; with 32 slots
-/// the clip readjusted 607 feathers a frame, with 16 587 (fewer
-/// surroundings watched, so less drift seen), one thread, one run each
-/// (before lost obstacles were only checked).
+/// that joined later). A footprint has the k = 10 nearest roots (the
+/// default) and typically 30 to 60 earlier candidates over it: 32 slots
+/// watch the nearest roots and most of those. Fewer watch less, so less
+/// drift is seen (BENCHMARKS.md, "Measurements behind the code's
+/// constants").
 const PLACEMENT_SLOTS: usize = 32;
 /// `counts` value of a feather adjusted since its placements were recorded.
 const PENDING: u8 = u8::MAX;

@@ -5,10 +5,9 @@ use glam::Vec3;
 
 /// Length of a feather as a multiple of the local spacing `d`. A feather
 /// then reaches over three to four rows of neighbours, so every point of the
-/// skin is covered two to three times, as on a real bird. (3.5 d left more
-/// skin bare where feathers pitch up or are shortened: at 4 d the exact
-/// coverage of the test coats rose by 0.5–1.5 points for half a degree more
-/// mean pitch.)
+/// skin is covered two to three times, as on a real bird; a shorter
+/// feather leaves skin bare where feathers pitch up or are shortened
+/// (BENCHMARKS.md, "Measurements behind the code's constants").
 pub(crate) const LENGTH_PER_SPACING: f32 = 4.0;
 /// Width as a multiple of `d`: the vanes reach a little past the lateral
 /// neighbours, so neighbouring feathers overlap sideways too.

@@ -198,7 +198,8 @@ fn install_quiet_hook() {
 /// The quiet hook: Plumage's panics are recorded, every other goes to `previous`.
 fn quiet_hook(previous: Hook) -> Hook {
     Box::new(move |info| {
-        let ours = INSIDE.with(Cell::get) > 0 || (crate::pool::on_worker_thread() && ACTIVE.load(Ordering::SeqCst) > 0);
+        let ours =
+            INSIDE.with(Cell::get) > 0 || (crate::workers::on_worker_thread() && ACTIVE.load(Ordering::SeqCst) > 0);
         if ours {
             let at = info.location().map(|l| format!("{}:{}", l.file(), l.line()));
             *LAST_LOCATION.lock().unwrap_or_else(|e| e.into_inner()) = at;
@@ -370,7 +371,7 @@ pub(crate) fn without_system(body: impl FnOnce() -> CallResult) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pool::WorkerPool;
+    use crate::workers::WorkerPool;
 
     /// Panics whose message holds this token are counted by the test hook.
     const TOKEN: &str = "quiet-hook-test";

@@ -3,6 +3,7 @@
 //! progress and parallel-for callbacks, and the conversion to and from the
 //! safe API's [`Config`].
 
+use super::carry::{Bytes, Finite, Flag, Narrow, OptionalPoint, Same, Triple};
 use super::convention::{Failure, read_versioned};
 use super::status::*;
 use crate::{Config, Mode, SamplerKind};
@@ -203,8 +204,8 @@ pub const PLUMAGE_PRESET_FEATHERS: u32 = 0;
 /// each overlapping the next by half.
 pub const PLUMAGE_PRESET_SCALES: u32 = 1;
 
-/// `plumage_config_init_preset`: the same as `PLUMAGE_PRESET_FEATHERS`
-/// (the bent coat's name while the rigid kite was the default).
+/// `plumage_config_init_preset`: another name for
+/// `PLUMAGE_PRESET_FEATHERS`, always with the same defaults.
 pub const PLUMAGE_PRESET_SLEEK: u32 = 2;
 
 /// `plumage_config_init_preset`: the paper's rigid feather, the defaults of
@@ -307,141 +308,109 @@ impl crate::progress::ProgressSink for HostProgress {
 /// smaller is refused.
 pub(crate) const CONFIG_V1_SIZE: usize = std::mem::offset_of!(PlumageConfig, drift_tolerance);
 
-impl PlumageConfig {
-    pub(crate) fn from_config(c: &Config) -> Self {
-        Self {
-            struct_size: std::mem::size_of::<PlumageConfig>() as u32,
-            sampler: match c.sampler {
-                SamplerKind::Guided => PLUMAGE_SAMPLER_GUIDED,
-                SamplerKind::Random => PLUMAGE_SAMPLER_RANDOM,
-            },
-            seed: c.seed,
-            threads: c.threads as u32,
-            mode: match c.mode {
-                Mode::Incremental => PLUMAGE_MODE_INCREMENTAL,
-                Mode::Legacy => PLUMAGE_MODE_LEGACY,
-                Mode::Rebuild => PLUMAGE_MODE_REBUILD,
-            },
-            target_feathers: c.target_feathers as u32,
-            k_neighbours: c.k_neighbours as u32,
-            spacing: c.spacing,
-            theta: c.theta,
-            randomness: c.randomness,
-            pool_factor: c.pool_factor,
-            feather_length: c.feather_length,
-            feather_width: c.feather_width,
-            feather_thickness: c.feather_thickness,
-            gamma: c.gamma,
-            lambda: c.lambda,
-            height_field_u: c.height_field_u as u32,
-            height_field_v: c.height_field_v as u32,
-            fluffiness: c.fluffiness,
-            collision_allowance: c.collision_allowance,
-            theta_s: c.theta_s,
-            flow_axis: c.flow_axis.to_array(),
-            recompute_neighbourhoods: c.recompute_neighbourhoods as u32,
-            progress: None,
-            progress_user_data: std::ptr::null_mut(),
-            flow_source_enabled: u32::from(c.flow_source.is_some()),
-            flow_source: c.flow_source.unwrap_or(Vec3::ZERO).to_array(),
-            drift_tolerance: c.drift_tolerance,
-            curvature_min_scale: c.curvature_min_scale,
-            shaft_segments: c.shaft_segments,
-            bend_limit: c.bend_limit,
-            length_per_spacing: c.length_per_spacing,
-            width_per_spacing: c.width_per_spacing,
-            pop_threshold: c.pop_threshold,
-            parallel_for: None,
-            parallel_for_context: std::ptr::null_mut(),
-            settle_rate: c.settle_rate,
-            checkpoint_interval: c.checkpoint_interval,
-            checkpoint_cap: c.checkpoint_cap,
-            reserved: 0,
-            memory_limit: c.memory_limit as u64,
-        }
+/// `PLUMAGE_SAMPLER_*` as a carrier (see `carry`).
+struct SamplerCode;
+
+impl SamplerCode {
+    fn to_c(v: &SamplerKind) -> (u32,) {
+        (match v {
+            SamplerKind::Guided => PLUMAGE_SAMPLER_GUIDED,
+            SamplerKind::Random => PLUMAGE_SAMPLER_RANDOM,
+        },)
     }
 
-    pub(crate) fn to_config(self) -> Result<Config, Failure> {
-        let invalid = |m: String| Failure::new(PLUMAGE_STATUS_INVALID_ARGUMENT, m);
-        let sampler = match self.sampler {
-            PLUMAGE_SAMPLER_GUIDED => SamplerKind::Guided,
-            PLUMAGE_SAMPLER_RANDOM => SamplerKind::Random,
-            s => {
-                return Err(invalid(format!("config.sampler {s} is not a PLUMAGE_SAMPLER_* value")));
-            }
-        };
-        let mode = match self.mode {
-            PLUMAGE_MODE_INCREMENTAL => Mode::Incremental,
-            PLUMAGE_MODE_LEGACY => Mode::Legacy,
-            PLUMAGE_MODE_REBUILD => Mode::Rebuild,
-            m => {
-                return Err(invalid(format!("config.mode {m} is not a PLUMAGE_MODE_* value")));
-            }
-        };
-        let floats = [
-            self.spacing,
-            self.theta,
-            self.randomness,
-            self.pool_factor,
-            self.feather_length,
-            self.feather_width,
-            self.feather_thickness,
-            self.gamma,
-            self.lambda,
-            self.fluffiness,
-            self.collision_allowance,
-            self.theta_s,
-            self.drift_tolerance,
-            self.curvature_min_scale,
-            self.bend_limit,
-            self.length_per_spacing,
-            self.width_per_spacing,
-            self.pop_threshold,
-            self.settle_rate,
-        ];
-        if floats.iter().chain(&self.flow_axis).chain(&self.flow_source).any(|x| !x.is_finite()) {
-            return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
+    fn from_c((v,): (u32,)) -> Result<SamplerKind, Failure> {
+        match v {
+            PLUMAGE_SAMPLER_GUIDED => Ok(SamplerKind::Guided),
+            PLUMAGE_SAMPLER_RANDOM => Ok(SamplerKind::Random),
+            s => Err(Failure::new(
+                PLUMAGE_STATUS_INVALID_ARGUMENT,
+                format!("config.sampler {s} is not a PLUMAGE_SAMPLER_* value"),
+            )),
         }
-        let cfg = Config {
-            seed: self.seed,
-            threads: self.threads as usize,
-            sampler,
-            mode,
-            spacing: self.spacing,
-            target_feathers: self.target_feathers as usize,
-            theta: self.theta,
-            randomness: self.randomness,
-            pool_factor: self.pool_factor,
-            feather_length: self.feather_length,
-            feather_width: self.feather_width,
-            feather_thickness: self.feather_thickness,
-            gamma: self.gamma,
-            lambda: self.lambda,
-            k_neighbours: self.k_neighbours as usize,
-            height_field_u: self.height_field_u as usize,
-            height_field_v: self.height_field_v as usize,
-            fluffiness: self.fluffiness,
-            collision_allowance: self.collision_allowance,
-            theta_s: self.theta_s,
-            drift_tolerance: self.drift_tolerance,
-            flow_axis: Vec3::from_array(self.flow_axis),
-            recompute_neighbourhoods: self.recompute_neighbourhoods != 0,
-            flow_source: (self.flow_source_enabled != 0).then(|| Vec3::from_array(self.flow_source)),
-            curvature_min_scale: self.curvature_min_scale,
-            shaft_segments: self.shaft_segments,
-            bend_limit: self.bend_limit,
-            length_per_spacing: self.length_per_spacing,
-            width_per_spacing: self.width_per_spacing,
-            pop_threshold: self.pop_threshold,
-            settle_rate: self.settle_rate,
-            checkpoint_interval: self.checkpoint_interval,
-            checkpoint_cap: self.checkpoint_cap,
-            memory_limit: usize::try_from(self.memory_limit).unwrap_or(usize::MAX),
-        };
-        cfg.validate()?;
-        Ok(cfg)
     }
 }
+
+/// `PLUMAGE_MODE_*` as a carrier (see `carry`).
+struct ModeCode;
+
+impl ModeCode {
+    fn to_c(v: &Mode) -> (u32,) {
+        (match v {
+            Mode::Incremental => PLUMAGE_MODE_INCREMENTAL,
+            Mode::Legacy => PLUMAGE_MODE_LEGACY,
+            Mode::Rebuild => PLUMAGE_MODE_REBUILD,
+        },)
+    }
+
+    fn from_c((v,): (u32,)) -> Result<Mode, Failure> {
+        match v {
+            PLUMAGE_MODE_INCREMENTAL => Ok(Mode::Incremental),
+            PLUMAGE_MODE_LEGACY => Ok(Mode::Legacy),
+            PLUMAGE_MODE_REBUILD => Ok(Mode::Rebuild),
+            m => Err(Failure::new(
+                PLUMAGE_STATUS_INVALID_ARGUMENT,
+                format!("config.mode {m} is not a PLUMAGE_MODE_* value"),
+            )),
+        }
+    }
+}
+
+/// Both conversions between [`Config`] and `PlumageConfig`, from
+/// [`crate::config::config_fields!`]. The C struct is built and taken
+/// apart in full (struct literal and pattern, no `..`), so a C field that
+/// no table entry and no C-only line below names is a compile error.
+macro_rules! define_conversions {
+    ($($(#[$doc:meta])* $name:ident: $ty:ty = $default:expr, c[$($cname:ident),+] by $carry:ident, check $check:ident;)*) => {
+        impl PlumageConfig {
+            /// The fields that carry a [`Config`] field, in the table's order
+            /// (the rest are `struct_size`, the callbacks and `reserved`).
+            #[cfg(test)]
+            const CARRYING_FIELDS: &'static [&'static str] = &[$($(stringify!($cname)),+),*];
+
+            /// The C struct holding `c` (no callbacks; `struct_size` this
+            /// library's).
+            pub(crate) fn from_config(c: &Config) -> Self {
+                $(let ($($cname,)+) = $carry::to_c(&c.$name);)*
+                Self {
+                    struct_size: std::mem::size_of::<PlumageConfig>() as u32,
+                    progress: None,
+                    progress_user_data: std::ptr::null_mut(),
+                    parallel_for: None,
+                    parallel_for_context: std::ptr::null_mut(),
+                    reserved: 0,
+                    $($($cname,)+)*
+                }
+            }
+
+            /// The checked configuration a caller's struct holds: refused
+            /// with PLUMAGE_STATUS_INVALID_ARGUMENT for an unknown sampler or
+            /// mode, PLUMAGE_STATUS_NON_FINITE for a NaN or infinity in any
+            /// float field (set or not), and as [`Config::validate`] refuses.
+            pub(crate) fn to_config(self) -> Result<Config, Failure> {
+                let PlumageConfig {
+                    struct_size: _,
+                    progress: _,
+                    progress_user_data: _,
+                    parallel_for: _,
+                    parallel_for_context: _,
+                    reserved: _,
+                    $($($cname,)+)*
+                } = self;
+                let finite = true $($(&& Finite::finite(&$cname))+)*;
+                $(let $name: $ty = $carry::from_c(($($cname,)+))?;)*
+                if !finite {
+                    return Err(Failure::new(PLUMAGE_STATUS_NON_FINITE, "config holds a NaN or infinite value"));
+                }
+                let cfg = Config { $($name,)* };
+                cfg.validate()?;
+                Ok(cfg)
+            }
+        }
+    };
+}
+
+crate::config::config_fields!(define_conversions);
 
 /// Reads the caller's config (NULL = defaults) into a checked `Config`.
 ///
@@ -455,7 +424,7 @@ pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<HostConfig
     // SAFETY: forwarded contract.
     let raw = unsafe { read_versioned(cfg, CONFIG_V1_SIZE, defaults, "PlumageConfig") }?;
     let parallel_for = raw.parallel_for.map(|run| {
-        Arc::new(HostParallelFor { run, context: raw.parallel_for_context }) as Arc<dyn crate::pool::ParallelFor>
+        Arc::new(HostParallelFor { run, context: raw.parallel_for_context }) as Arc<dyn crate::workers::ParallelFor>
     });
     Ok(HostConfig { config: raw.to_config()?, progress: HostProgress::from_config(&raw), parallel_for })
 }
@@ -464,10 +433,10 @@ pub(crate) unsafe fn read_config(cfg: *const PlumageConfig) -> Result<HostConfig
 pub(crate) struct HostConfig {
     pub config: Config,
     pub progress: Option<HostProgress>,
-    pub parallel_for: Option<Arc<dyn crate::pool::ParallelFor>>,
+    pub parallel_for: Option<Arc<dyn crate::workers::ParallelFor>>,
 }
 
-/// The host's parallel-for as the pools' [`crate::pool::ParallelFor`].
+/// The host's parallel-for as the pools' [`crate::workers::ParallelFor`].
 #[derive(Debug)]
 struct HostParallelFor {
     run: unsafe extern "C" fn(*mut c_void, u32, PlumageTaskFn, *mut c_void),
@@ -481,7 +450,7 @@ unsafe impl Send for HostParallelFor {}
 
 unsafe impl Sync for HostParallelFor {}
 
-impl crate::pool::ParallelFor for HostParallelFor {
+impl crate::workers::ParallelFor for HostParallelFor {
     fn parallel_for(&self, count: usize, task: &(dyn Fn(usize) + Sync)) {
         /// What a `PlumageTaskFn` calls: the pool's task behind `context`.
         unsafe extern "C" fn trampoline(context: *mut c_void, index: u32) {
@@ -495,5 +464,91 @@ impl crate::pool::ParallelFor for HostParallelFor {
         let task: &(dyn Fn(usize) + Sync) = task;
         // SAFETY: a host function with the documented signature and contract.
         unsafe { (self.run)(self.context, count, Some(trampoline), &task as *const _ as *mut c_void) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every field differs from its default here (the literal has no `..`,
+    /// so a new field must be given a value), and survives both conversions.
+    #[test]
+    fn every_field_is_carried_both_ways() {
+        let cfg = Config {
+            seed: 7,
+            threads: 3,
+            sampler: SamplerKind::Random,
+            mode: Mode::Legacy,
+            spacing: 0.25,
+            target_feathers: 1234,
+            theta: 0.5,
+            randomness: 0.25,
+            pool_factor: 12.0,
+            feather_length: 1.5,
+            feather_width: 0.5,
+            feather_thickness: 0.125,
+            gamma: 0.7,
+            lambda: 0.2,
+            k_neighbours: 12,
+            height_field_u: 20,
+            height_field_v: 10,
+            fluffiness: 0.1,
+            collision_allowance: 0.2,
+            theta_s: 0.1,
+            drift_tolerance: 0.2,
+            flow_axis: Vec3::new(0.0, 1.0, 0.0),
+            flow_source: Some(Vec3::new(1.0, 2.0, 3.0)),
+            recompute_neighbourhoods: false,
+            curvature_min_scale: 0.5,
+            shaft_segments: 2,
+            bend_limit: 0.3,
+            length_per_spacing: 3.0,
+            width_per_spacing: 1.5,
+            pop_threshold: 0.2,
+            settle_rate: 0.1,
+            checkpoint_interval: 4,
+            checkpoint_cap: 8,
+            memory_limit: 1 << 30,
+        };
+        assert_eq!(cfg.differing_fields(&Config::default()), Config::FIELD_NAMES);
+        assert_eq!(PlumageConfig::from_config(&cfg).to_config().unwrap(), cfg);
+        assert_eq!(PlumageConfig::from_config(&Config::default()).to_config().unwrap(), Config::default());
+    }
+
+    /// The header's `PlumageConfig` has exactly the fields the table names,
+    /// besides the C-only ones.
+    #[test]
+    fn the_header_declares_every_carried_field() {
+        let header = include_str!("../../include/plumage.h");
+        let body =
+            header.split("typedef struct PlumageConfig {").nth(1).unwrap().split("} PlumageConfig;").next().unwrap();
+        let mut declared: Vec<&str> = body
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.starts_with('*') && !l.starts_with("/*") && l.ends_with(';'))
+            .map(|l| l.split('[').next().unwrap().trim_end_matches(';').rsplit([' ', '*']).next().unwrap())
+            .filter(|name| {
+                !["struct_size", "progress", "progress_user_data", "parallel_for", "parallel_for_context", "reserved"]
+                    .contains(name)
+            })
+            .collect();
+        let mut carried = PlumageConfig::CARRYING_FIELDS.to_vec();
+        declared.sort_unstable();
+        carried.sort_unstable();
+        assert_eq!(declared, carried);
+    }
+
+    #[test]
+    fn a_nan_in_any_float_field_is_refused() {
+        let defaults = PlumageConfig::from_config(&Config::default());
+        for i in 0..3 {
+            let mut c = defaults;
+            c.flow_source[i] = f32::NAN;
+            assert_eq!(c.to_config().unwrap_err().status, PLUMAGE_STATUS_NON_FINITE);
+        }
+        let mut c = defaults;
+        c.settle_rate = f32::INFINITY;
+        assert_eq!(c.to_config().unwrap_err().status, PLUMAGE_STATUS_NON_FINITE);
     }
 }

@@ -6,6 +6,7 @@
 use super::status::*;
 
 /// A refused call: its status and message.
+#[derive(Debug)]
 pub(crate) struct Failure {
     pub status: u32,
     pub message: String,

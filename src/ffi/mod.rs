@@ -23,6 +23,7 @@ mod status;
 mod convention;
 
 // `PlumageConfig`, its constants and callbacks.
+mod carry;
 mod config;
 
 // `PlumageMeshDesc`.

@@ -29,22 +29,24 @@
 //! Both leave the coat ready for the export and the checks.
 
 mod phases;
+mod rule;
 mod solve;
 mod step;
+mod surroundings;
 
-pub use phases::Workspace;
+pub use phases::{StepWorkspace, Workspace};
+pub use rule::FrameRule;
 pub use solve::{solve, solve_beside};
-pub use step::{StepWorkspace, step_coat};
+pub use step::step_coat;
 
-use crate::Mode;
 use crate::coat::{Coat, Dressing};
 use crate::error::Result;
 use crate::progress::Progress;
 use glam::Vec3;
 
-/// One step of the animation to the welded `positions`, by the dressing's
-/// mode: `rebuild` solves from scratch (and counts the frame), the
-/// incremental and legacy modes update the coat in place.
+/// One step of the animation to the welded `positions`, by the
+/// configuration's [`FrameRule`]: the rebuild rule solves from scratch (and
+/// counts the frame), the others update the coat in place.
 pub fn advance(
     coat: &mut Coat,
     dressing: &Dressing,
@@ -53,10 +55,11 @@ pub fn advance(
     step: &mut StepWorkspace,
     progress: &Progress,
 ) -> Result<()> {
-    if dressing.config.mode == Mode::Rebuild {
-        coat.frame_index += 1;
-        solve(coat, dressing, positions, work, progress)
-    } else {
-        step_coat(coat, dressing, positions, work, step, progress)
+    match FrameRule::of(&dressing.config) {
+        FrameRule::Rebuild => {
+            coat.frame_index += 1;
+            solve(coat, dressing, positions, work, progress)
+        }
+        rule => step_coat(coat, dressing, rule, positions, work, step, progress),
     }
 }

@@ -3,9 +3,13 @@
 
 use crate::Mode;
 use crate::adjustment::Adjuster;
+use crate::animation::contact::{Contacts, Sphere};
+use crate::animation::motion::RootMap;
 use crate::coat::{Coat, Dressing};
+use crate::csr::Csr;
 use crate::error::Result;
 use crate::feather::shaft_direction;
+use crate::geometry::RootFrame;
 use crate::ordering::Priorities;
 use crate::progress::{Phase, Progress};
 use crate::stats::OrderingReport;
@@ -22,6 +26,45 @@ pub struct Workspace {
     /// Shaft directions (the legacy rule's `o_i`).
     pub orientations: Vec<Vec3>,
 }
+
+/// Buffers of the frame-to-frame step ([`super::step_coat`]), reused
+/// every frame; never part of the state.
+#[derive(Debug, Default)]
+pub struct StepWorkspace {
+    pub(super) previous_frames: Vec<RootFrame>,
+    pub(super) previous_ranks: Vec<u32>,
+    pub(super) previous_candidates: Csr<u32>,
+    pub(super) maps: Vec<RootMap>,
+    pub(super) displacement: Vec<f32>,
+    pub(super) net: Vec<f32>,
+    pub(super) orientations: Vec<glam::Quat>,
+    pub(super) spheres: Vec<Sphere>,
+    pub(super) seeds: Vec<bool>,
+    pub(super) suspects: Vec<bool>,
+    pub(super) no_suspects: Vec<bool>,
+    pub(super) verified: Vec<bool>,
+    pub(super) r_k: Vec<u32>,
+    pub(super) body_ids: Vec<u32>,
+    pub(super) contacts: Contacts,
+}
+
+crate::memory::heap_size_of_fields!(StepWorkspace {
+    previous_frames,
+    previous_ranks,
+    previous_candidates,
+    maps,
+    displacement,
+    net,
+    orientations,
+    spheres,
+    seeds,
+    suspects,
+    no_suspects,
+    verified,
+    r_k,
+    body_ids,
+    contacts
+});
 
 /// Phase 3 from scratch, the static order: the priority difference of
 /// every pair (Eq. 3, or Eq. 2 with the feathers' current shaft directions

@@ -3,8 +3,9 @@
 //! order static and every feather adjusted from a flat start.
 
 use super::phases::{self, Workspace};
-use crate::adjustment::{AdjustSteps, CandidateLists, OrderedRun, Selection};
+use crate::adjustment::{AdjustSteps, OrderedRun, Selection};
 use crate::coat::{Coat, Dressing};
+use crate::csr::CsrView;
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::progress::{Phase, Progress};
@@ -50,16 +51,16 @@ pub fn solve_beside<R: Send>(
     coat.poses.resize(dressing.len(), FeatherPose::default());
     phases::static_order(coat, dressing, work, order_start);
     progress.check(Phase::Adjusting, 0.0)?;
-    let (offsets, indices) = coat.neighbourhoods.obstacle_csr();
     let run = OrderedRun {
         frames: &coat.frames,
         shapes: &dressing.shapes,
         order: coat.order.order(),
         rank: coat.order.ranks(),
-        candidates: CandidateLists::new(offsets, indices),
+        candidates: CsrView::from(coat.neighbourhoods.obstacle_csr()),
         body: &coat.body,
         params: &dressing.adjust_params,
         steps: AdjustSteps::Full,
+        settle_rate: 0.0,
     };
     let (side, stats) = rayon::join(beside, || {
         work.adjuster.adjust_in_order_until(&run, &mut coat.poses, Selection::All, &|done| {
@@ -69,6 +70,8 @@ pub fn solve_beside<R: Send>(
     // A stopped adjustment (None) has set the progress's stop flag.
     progress.check(Phase::Adjusting, 1.0)?;
     let stats = stats.unwrap_or_default();
+    coat.readjusted.clear();
+    coat.readjusted.extend_from_slice(work.adjuster.adjusted());
     coat.staleness.reset(dressing.len());
     coat.settling.clear();
     coat.frame_report = FrameReport {

@@ -14,7 +14,7 @@
 //! anchor) rather than from the pool point snapped to it, so the pool's
 //! granularity does not accumulate along a run of samples.
 
-use super::pool::DiskSampler;
+use super::disk::DiskSampler;
 use crate::field::Fields;
 use crate::geometry::SurfacePoint;
 use crate::rng::Rng;

@@ -18,6 +18,7 @@
 //! the samplers themselves are sequential, and no hash-map order reaches
 //! the output.
 
+mod disk;
 mod grid;
 mod guided;
 pub mod metrics;
@@ -35,8 +36,9 @@ use crate::progress::{Phase, Progress};
 use crate::rng::Rng;
 use crate::roots::{RootBinding, edge_basis_coordinates, root_id};
 use crate::surface::Surface;
+use disk::DiskSampler;
 use glam::Vec3;
-use pool::{DensityField, DiskSampler, MAX_POOL, SortedPool};
+use pool::{DensityField, MAX_POOL, SortedPool};
 use std::time::Instant;
 
 /// Root count aimed at when neither a spacing nor a target is given.
@@ -51,9 +53,9 @@ const RANDOM_PACKING: f64 = 0.67;
 /// The spacing search's first guess: roots per `d²` of effective area each
 /// sampler plants on a large count (`n → ∞`), and `EDGE_LOSS`: at `n` roots
 /// a share `EDGE_LOSS/√n` of that is lost along the feathered region's
-/// edges. Fitted to the first passes of the built-in model, the Flamingo,
-/// the Fox and the bird at 2 000 and 10 000 roots (BENCHMARKS.md, "Issue
-/// #20, second round"): the guided sampler's counts per model lie within
+/// edges. Fitted to the first passes of the shared models at 2 000 and
+/// 10 000 roots (BENCHMARKS.md, "Issue #20, second round"): the guided
+/// sampler's counts per model lie within
 /// about ±4 % of this, the random sampler's within about ±5 %, so most
 /// requests need one pass.
 const GUIDED_FIRST_GUESS: f64 = 0.696;

@@ -4,7 +4,7 @@
 //! throwing with rejection (random sequential adsorption), maximal with
 //! respect to the pool.
 
-use super::pool::DiskSampler;
+use super::disk::DiskSampler;
 
 /// Throws every pool point in turn (`slots` in draw order); keepers become samples.
 pub(crate) fn sample_random(disk: &mut DiskSampler<'_>, slots: &[u32]) {

@@ -15,7 +15,7 @@ pub mod walk;
 pub use geodesic::NearbyPatch;
 pub use walk::{WalkEnd, WalkResult};
 
-use crate::csr::Csr;
+use crate::csr::{Csr, CsrView};
 use crate::geometry::{SurfacePoint, triangle_area_vector};
 use crate::mesh::WeldedMesh;
 use glam::Vec3;
@@ -86,8 +86,9 @@ impl Surface {
         let (edges, face_edges, edge_face_start, edge_faces) = build_edges(&triangles);
         let mut across = vec![[None; 3]; triangles.len()];
         let (mut boundary_edges, mut non_manifold_edges) = (0, 0);
+        let faces_of_edge = CsrView::new(&edge_face_start, &edge_faces);
         for e in 0..edges.len() {
-            let faces = &edge_faces[edge_face_start[e] as usize..edge_face_start[e + 1] as usize];
+            let faces = faces_of_edge.row(e);
             match faces.len() {
                 1 => boundary_edges += 1,
                 2 => {
@@ -195,7 +196,7 @@ impl Surface {
     /// All faces sharing edge `e` (one for a boundary edge, three or more for
     /// a non-manifold one).
     pub fn faces_of_edge(&self, e: usize) -> &[u32] {
-        &self.edge_faces[self.edge_face_start[e] as usize..self.edge_face_start[e + 1] as usize]
+        CsrView::new(&self.edge_face_start, &self.edge_faces).row(e)
     }
 
     /// The face across side `side` of face `f`; `None` at a boundary or

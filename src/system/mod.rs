@@ -12,11 +12,11 @@ use crate::frame::{StepWorkspace, Workspace};
 use crate::geometry::RootFrame;
 use crate::memory::MemoryUse;
 use crate::mesh::{MeshInput, WeldedMesh, check_frame_positions, weld};
-use crate::pool::WorkerPool;
 use crate::progress::{Phase, Progress};
 use crate::sampling::plant_roots_with_progress;
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport, SamplingReport};
 use crate::surface::Surface;
+use crate::workers::WorkerPool;
 use glam::Vec3;
 use std::collections::BTreeMap;
 
@@ -72,12 +72,12 @@ impl System {
 
     /// As [`System::new_with_progress`]; with `parallel_for`, every parallel
     /// section of this system runs through the host's parallel-for,
-    /// `config.threads` tasks at a time (see [`crate::pool`]).
+    /// `config.threads` tasks at a time (see [`crate::workers`]).
     pub fn new_with_parallel_for(
         config: &Config,
         mesh: &MeshInput<'_>,
         progress: &Progress,
-        parallel_for: Option<std::sync::Arc<dyn crate::pool::ParallelFor>>,
+        parallel_for: Option<std::sync::Arc<dyn crate::workers::ParallelFor>>,
     ) -> Result<Self> {
         config.validate()?;
         progress.check(Phase::Preparing, 0.0)?;
@@ -284,6 +284,7 @@ impl System {
             body,
             staleness,
             settling,
+            readjusted,
             frame_index: _,
             ordering_report: _,
             frame_report: _,
@@ -300,6 +301,7 @@ impl System {
                 + poses.heap_bytes()
                 + staleness.heap_bytes()
                 + settling.heap_bytes()
+                + readjusted.heap_bytes()
                 + records.heap_bytes()
                 + triangles.heap_bytes()
                 + previous_poses.heap_bytes()
@@ -337,7 +339,7 @@ impl System {
     /// Which feathers the last create, step or evaluate readjusted (one flag
     /// per feather, in the order of [`System::feathers`]).
     pub fn readjusted(&self) -> &[bool] {
-        self.work.adjuster.adjusted()
+        &self.coat.readjusted
     }
 
     /// Sampling figures of the roots.
@@ -448,8 +450,7 @@ impl System {
         let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
         self.previous_frames.clone_from(&self.coat.frames);
         let limit = self.dressing.config.memory_limit;
-        let backup = (progress.is_interruptible() || limit > 0)
-            .then(|| (self.coat.clone(), self.work.adjuster.adjusted().to_vec()));
+        let backup = (progress.is_interruptible() || limit > 0).then(|| self.coat.clone());
         let result = update(self, progress).and_then(|()| match limit {
             0 => Ok(()),
             _ => match self.memory().total() {
@@ -473,9 +474,8 @@ impl System {
             }
             Err(_) => {
                 self.previous_poses = older_poses;
-                if let Some((coat, readjusted)) = backup {
+                if let Some(coat) = backup {
                     self.coat = coat;
-                    self.work.adjuster.set_adjusted(&readjusted);
                 }
             }
         }

@@ -13,8 +13,7 @@ use glam::Vec3;
 /// Saved state: save a frame, resume from it (see [`crate::snapshot`] for
 /// the blob's header and checksum). The payload is the coat
 /// ([`Coat::write_state`]), then the flags of [`System::readjusted`] (u64
-/// count, one byte 0 or 1 per feather): a per-frame report the adjuster's
-/// workspace keeps.
+/// count, one byte 0 or 1 per feather, `Coat::readjusted`).
 impl System {
     /// The state of the current frame as a self-contained blob: resuming
     /// from it with [`System::load_state`] gives byte-identical later frames.
@@ -37,7 +36,7 @@ impl System {
     pub fn load_state(&mut self, blob: &[u8]) -> Result<()> {
         let mut reader = Reader::open(blob, self.state_fingerprint())?;
         let dressing = &self.dressing;
-        let coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
+        let mut coat = self.pool.install(|| Coat::read_state(&mut reader, dressing))?;
         let n = reader.len(1, Some(dressing.len()))?;
         let mut readjusted = Vec::with_capacity(n);
         for _ in 0..n {
@@ -48,8 +47,8 @@ impl System {
             }
         }
         reader.finish()?;
+        coat.readjusted = readjusted;
         self.coat = coat;
-        self.work.adjuster.set_adjusted(&readjusted);
         self.pose_changes = PoseChanges::default();
         self.previous_poses.clear();
         self.export();
@@ -114,90 +113,8 @@ impl System {
     /// never does), the welded rest mesh (positions bit for bit, triangles,
     /// caller vertex count) and every root's binding and shape.
     fn state_fingerprint(&self) -> u64 {
-        // Destructured in full so that a new field cannot be forgotten here.
-        let Config {
-            seed,
-            threads: _,
-            sampler,
-            mode,
-            spacing,
-            target_feathers,
-            theta,
-            randomness,
-            pool_factor,
-            feather_length,
-            feather_width,
-            feather_thickness,
-            gamma,
-            lambda,
-            k_neighbours,
-            height_field_u,
-            height_field_v,
-            fluffiness,
-            collision_allowance,
-            theta_s,
-            drift_tolerance,
-            flow_axis,
-            flow_source,
-            recompute_neighbourhoods,
-            curvature_min_scale,
-            shaft_segments,
-            bend_limit,
-            length_per_spacing,
-            width_per_spacing,
-            pop_threshold: _,
-            settle_rate,
-            checkpoint_interval: _,
-            checkpoint_cap: _,
-            memory_limit: _,
-        } = &self.dressing.config;
+        let mut words = config_words(&self.dressing.config);
         let bits = |x: f32| u64::from(x.to_bits());
-        let mut words = vec![
-            *seed,
-            match sampler {
-                SamplerKind::Guided => 0,
-                SamplerKind::Random => 1,
-            },
-            match mode {
-                Mode::Incremental => 0,
-                Mode::Legacy => 1,
-                Mode::Rebuild => 2,
-            },
-            *target_feathers as u64,
-            *k_neighbours as u64,
-            *height_field_u as u64,
-            *height_field_v as u64,
-            u64::from(*recompute_neighbourhoods),
-            u64::from(flow_source.is_some()),
-            u64::from(*shaft_segments),
-        ];
-        words.extend(
-            [
-                *spacing,
-                *theta,
-                *randomness,
-                *pool_factor,
-                *feather_length,
-                *feather_width,
-                *feather_thickness,
-                *gamma,
-                *lambda,
-                *fluffiness,
-                *collision_allowance,
-                *theta_s,
-                *drift_tolerance,
-                *settle_rate,
-                *curvature_min_scale,
-                *bend_limit,
-                *length_per_spacing,
-                *width_per_spacing,
-                flow_axis.x,
-                flow_axis.y,
-                flow_axis.z,
-            ]
-            .map(bits),
-        );
-        words.extend(flow_source.unwrap_or(Vec3::ZERO).to_array().map(bits));
         let mesh = &self.mesh;
         words.push(mesh.caller_vertex_count() as u64);
         words.push(mesh.positions.len() as u64);
@@ -221,4 +138,95 @@ impl System {
         }
         hash64(&words)
     }
+}
+
+/// The words of the fingerprint that come from the configuration: every
+/// field that can change a result (all but the thread count and the
+/// figures-only and memory fields).
+fn config_words(config: &Config) -> Vec<u64> {
+    // Destructured in full so that a new field cannot be forgotten here.
+    let Config {
+        seed,
+        threads: _,
+        sampler,
+        mode,
+        spacing,
+        target_feathers,
+        theta,
+        randomness,
+        pool_factor,
+        feather_length,
+        feather_width,
+        feather_thickness,
+        gamma,
+        lambda,
+        k_neighbours,
+        height_field_u,
+        height_field_v,
+        fluffiness,
+        collision_allowance,
+        theta_s,
+        drift_tolerance,
+        flow_axis,
+        flow_source,
+        recompute_neighbourhoods,
+        curvature_min_scale,
+        shaft_segments,
+        bend_limit,
+        length_per_spacing,
+        width_per_spacing,
+        pop_threshold: _,
+        settle_rate,
+        checkpoint_interval: _,
+        checkpoint_cap: _,
+        memory_limit: _,
+    } = config;
+    let bits = |x: f32| u64::from(x.to_bits());
+    let mut words = vec![
+        *seed,
+        match sampler {
+            SamplerKind::Guided => 0,
+            SamplerKind::Random => 1,
+        },
+        match mode {
+            Mode::Incremental => 0,
+            Mode::Legacy => 1,
+            Mode::Rebuild => 2,
+        },
+        *target_feathers as u64,
+        *k_neighbours as u64,
+        *height_field_u as u64,
+        *height_field_v as u64,
+        u64::from(*recompute_neighbourhoods),
+        u64::from(flow_source.is_some()),
+        u64::from(*shaft_segments),
+    ];
+    words.extend(
+        [
+            *spacing,
+            *theta,
+            *randomness,
+            *pool_factor,
+            *feather_length,
+            *feather_width,
+            *feather_thickness,
+            *gamma,
+            *lambda,
+            *fluffiness,
+            *collision_allowance,
+            *theta_s,
+            *drift_tolerance,
+            *settle_rate,
+            *curvature_min_scale,
+            *bend_limit,
+            *length_per_spacing,
+            *width_per_spacing,
+            flow_axis.x,
+            flow_axis.y,
+            flow_axis.z,
+        ]
+        .map(bits),
+    );
+    words.extend(flow_source.unwrap_or(Vec3::ZERO).to_array().map(bits));
+    words
 }

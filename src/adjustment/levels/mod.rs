@@ -22,6 +22,7 @@ use super::checks::bounding_sphere;
 use super::obstacle::ObstacleBoxes;
 use super::{AdjustParams, AdjustSteps, DrapeRoute, HeightField};
 use crate::body::BodyIndex;
+use crate::csr::{Csr, CsrView};
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use glam::Vec3;
@@ -30,20 +31,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
-    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, level_start, level_items,
-    cursor, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependent_offsets,
-    dependents
-} plain { settle_rate, #[cfg(test)] walk_share });
+    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
+} plain { #[cfg(test)] walk_share, #[cfg(test)] pairs_only });
 
+mod scope;
 #[cfg(test)]
 mod tests;
 mod visit;
+mod walk;
 
 use super::settle::tip_above;
-pub use visit::{CandidateLists, Selection};
-use visit::{
-    Inputs, Level, Marks, Posed, Precheck, Visit, Worker, adjust_one, check_clear, collect_obstacle_ids, run_level,
-};
+pub use visit::Selection;
+use visit::{Inputs, Precheck, Visit, Worker};
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
@@ -52,10 +51,10 @@ const CHUNKS_PER_THREAD: usize = 4;
 /// ahead.
 const WALK_SHARE: usize = 64;
 
-/// How a run visits feathers one after another along the order, and
-/// where it finds what lies on a feather it changed.
+/// How a serial run (one feather after another along the order, not by
+/// levels) finds what lies on a feather it changed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Walk {
+enum SerialWalk {
     /// Over symmetric candidate rows (a step's second pass): the later
     /// feathers of a feather's own row.
     Symmetric,
@@ -110,13 +109,10 @@ pub struct Adjuster {
     changed: Vec<bool>,
     adjusted: Vec<bool>,
     verified: Vec<bool>,
-    level_start: Vec<u32>,
-    level_items: Vec<u32>,
-    cursor: Vec<u32>,
+    /// The feathers of each level in order: row `l` holds level `l + 1`.
+    levels: Csr<u32>,
     outcomes: Vec<Visit>,
     workers: Vec<Worker>,
-    /// The settle rate of the next run only (see [`Adjuster::settle_next_run`]).
-    settle_rate: f32,
     /// Which feathers the last run held back from their solved pose.
     settling: Vec<bool>,
     /// Verifying (not sparse): the suspects checked ahead of the ordered
@@ -128,12 +124,15 @@ pub struct Adjuster {
     precheck_outcomes: Vec<Precheck>,
     /// The transpose of the candidate rows of a walk over obstacle rows:
     /// the feathers listing each feather.
-    dependent_offsets: Vec<u32>,
-    dependents: Vec<u32>,
+    dependents: Csr<u32>,
     /// Tests only: replaces [`WALK_SHARE`] (0 always walks, `usize::MAX`
     /// never does).
     #[cfg(test)]
     walk_share: Option<usize>,
+    /// Tests only: verifies with the pairs only (or with every check)
+    /// whether the run is sparse or not.
+    #[cfg(test)]
+    pairs_only: Option<bool>,
 }
 
 impl Adjuster {
@@ -153,27 +152,10 @@ impl Adjuster {
         &self.verified
     }
 
-    /// The next run (only) moves each adjusted feather from its current
-    /// pose toward its solved pose by at most `rate` radians in pitch, roll
-    /// and each bend, when that pose passes the exact checks; otherwise it
-    /// lifts it from there by the smallest of a few pitch steps that
-    /// passes, else takes the solved pose (see
-    /// [`crate::animation::coherence`]). 0 takes the solved pose.
-    pub fn settle_next_run(&mut self, rate: f32) {
-        self.settle_rate = rate;
-    }
-
     /// Which feathers the last run held back from their solved pose (they
     /// settle further in later frames).
     pub fn settling(&self) -> &[bool] {
         &self.settling
-    }
-
-    /// Replaces what [`adjusted`](Self::adjusted) reports, e.g. with the
-    /// flags saved with a frame that is being resumed.
-    pub fn set_adjusted(&mut self, flags: &[bool]) {
-        self.adjusted.clear();
-        self.adjusted.extend_from_slice(flags);
     }
 
     /// Room in every worker for `longest` obstacles, so that a later call
@@ -218,7 +200,7 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
-        self.ordered_run(run, poses, selection, keep_going, (false, false))
+        self.ordered_run(run, poses, selection, keep_going, false)
     }
 
     /// As [`Adjuster::adjust_in_order_until`], one feather after the other
@@ -242,11 +224,11 @@ impl Adjuster {
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) -> Option<AdjustStats> {
-        self.ordered_run(run, poses, selection, keep_going, (true, true))
+        self.ordered_run(run, poses, selection, keep_going, true)
     }
 
     /// Both ways of [`Adjuster::adjust_in_order_until`]: by levels, or
-    /// `sparse`, verifying with every check or the pairs only (see
+    /// `sparse` (verifying with the pairs only, see
     /// [`Adjuster::adjust_sparse_until`]).
     fn ordered_run(
         &mut self,
@@ -254,14 +236,47 @@ impl Adjuster {
         poses: &mut [FeatherPose],
         selection: Selection<'_>,
         keep_going: &(dyn Fn(f32) -> bool + Sync),
-        (sparse, pairs_only): (bool, bool),
+        sparse: bool,
     ) -> Option<AdjustStats> {
-        let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps } = *run;
+        let OrderedRun { frames, shapes, order, rank, candidates, body, params, steps, settle_rate } = *run;
         let start = Instant::now();
-        let settle_rate = std::mem::take(&mut self.settle_rate);
+        self.begin_run(run, poses, selection, keep_going)?;
+        let inputs = Inputs {
+            frames,
+            shapes,
+            rank,
+            candidates,
+            body,
+            params,
+            steps,
+            selection,
+            pairs_only: self.pairs_only_or(sparse),
+            settle_rate,
+            keep_going,
+        };
+        let mut stats = AdjustStats::default();
+        match self.choose_walk(&inputs, order, poses, sparse) {
+            Some(walk) => self.walk_serially(walk, &inputs, order, poses, &mut stats)?,
+            None => self.walk_levels(&inputs, order, poses, &mut stats)?,
+        }
+        stats.seconds = start.elapsed().as_secs_f64();
+        Some(stats)
+    }
+
+    /// Checks the run's inputs agree in length, poses every feather, and
+    /// readies the workers and the per-feather marks; `None` when
+    /// `keep_going` said stop.
+    fn begin_run(
+        &mut self,
+        run: &OrderedRun<'_>,
+        poses: &[FeatherPose],
+        selection: Selection<'_>,
+        keep_going: &(dyn Fn(f32) -> bool + Sync),
+    ) -> Option<()> {
+        let OrderedRun { frames, shapes, order, rank, candidates, body, params, .. } = *run;
         let n = frames.len();
         assert!(
-            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.len() == n,
+            shapes.len() == n && poses.len() == n && order.len() == n && rank.len() == n && candidates.rows() == n,
             "adjust_in_order: frames, shapes, poses, order, rank and candidate rows must all have one entry per feather"
         );
         match selection {
@@ -281,7 +296,7 @@ impl Adjuster {
         self.prepare_workers(params);
         // Room for the longest row up front: which rows a worker meets
         // varies from frame to frame, and its buffer must not creep up.
-        let longest = (0..n).map(|i| candidates.of(i).len()).max().unwrap_or(0);
+        let longest = (0..n).map(|i| candidates.row(i).len()).max().unwrap_or(0);
         self.reserve_obstacles(longest);
         // Body queries list each triangle at most once; a rare wide query
         // (a skin search widening far from the feather) must not grow them.
@@ -289,193 +304,13 @@ impl Adjuster {
         self.workers
             .iter_mut()
             .for_each(|w| w.field.body_scratch.ids.reserve(triangles.saturating_sub(w.field.body_scratch.ids.len())));
-        self.moved.clear();
-        self.moved.resize(n, false);
-        self.changed.clear();
-        self.changed.resize(n, false);
-        self.adjusted.clear();
-        self.adjusted.resize(n, false);
-        self.verified.clear();
-        self.verified.resize(n, false);
-        self.settling.clear();
-        self.settling.resize(n, false);
-
-        let mut stats = AdjustStats::default();
-        let inputs = Inputs {
-            frames,
-            shapes,
-            rank,
-            candidates,
-            body,
-            params,
-            steps,
-            selection,
-            pairs_only,
-            settle_rate,
-            keep_going,
-        };
+        for flags in [&mut self.moved, &mut self.changed, &mut self.adjusted, &mut self.verified, &mut self.settling] {
+            flags.clear();
+            flags.resize(n, false);
+        }
         self.prechecked.clear();
         self.prechecked.resize(n, Precheck::None);
-        // Verifying by levels, the suspects are checked ahead first; when
-        // that leaves few feathers to adjust, a walk along the order that
-        // visits only them and what they change costs less than the levels
-        // (thousands of them, most holding a feather or two). Either way
-        // gives the same poses; the choice depends on the checks' answers
-        // only, never on the thread count.
-        let mut walk = sparse.then_some(Walk::Symmetric);
-        if !sparse && let Selection::Verify { seeds, .. } = selection {
-            self.mark_selected(n, selection);
-            self.precheck(&inputs, order, poses);
-            let blocked = self.prechecked.iter().filter(|&&p| p == Precheck::Blocked).count();
-            let to_adjust = seeds.iter().filter(|&&s| s).count() + blocked;
-            #[cfg(test)]
-            let share = self.walk_share.unwrap_or(WALK_SHARE);
-            #[cfg(not(test))]
-            let share = WALK_SHARE;
-            if to_adjust.saturating_mul(share) < n {
-                self.transpose(candidates);
-                walk = Some(Walk::Transposed);
-            }
-        }
-        if let Some(walk) = walk {
-            if walk == Walk::Symmetric {
-                self.mark_selected(n, selection);
-            }
-            for (k, &i) in order.iter().enumerate() {
-                if k % 16 == 0 && !keep_going(k as f32 / n.max(1) as f32) {
-                    return None;
-                }
-                let i = i as usize;
-                if !self.in_scope[i] {
-                    continue;
-                }
-                let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-                let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-                let visit = adjust_one(&inputs, i, poses, posed, marks, &mut self.workers[0]);
-                self.apply(i, &visit, &inputs, poses, &mut stats);
-                if self.changed[i] {
-                    // What lies on it may now meet it or stand on nothing.
-                    let dependents = match walk {
-                        Walk::Symmetric => candidates.of(i),
-                        Walk::Transposed => CandidateLists::new(&self.dependent_offsets, &self.dependents).of(i),
-                    };
-                    for &j in dependents {
-                        if rank[j as usize] > rank[i] {
-                            self.in_scope[j as usize] = true;
-                        }
-                    }
-                }
-            }
-            stats.levels = match walk {
-                Walk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
-                // The checks ahead, then one feather adjusted after another.
-                Walk::Transposed => 1 + stats.adjusted,
-            };
-            stats.seconds = start.elapsed().as_secs_f64();
-            return Some(stats);
-        }
-        self.mark_scope(order, rank, candidates, selection);
-        if !keep_going(0.0) {
-            return None;
-        }
-        stats.levels = self.assign_levels(order, rank, candidates);
-        let levels = stats.levels;
-        for l in 0..levels {
-            if !keep_going(l as f32 / levels.max(1) as f32) {
-                return None;
-            }
-            let items = &self.level_items[self.level_start[l] as usize..self.level_start[l + 1] as usize];
-            let outcomes = &mut self.outcomes[..items.len()];
-            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-            let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-            let done = l as f32 / levels.max(1) as f32;
-            run_level(&inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
-            // A level cut short left some outcomes unvisited: nothing is applied.
-            if !keep_going(done) {
-                return None;
-            }
-            let (start, end) = (self.level_start[l] as usize, self.level_start[l + 1] as usize);
-            for k in 0..end - start {
-                let (i, outcome) = (self.level_items[start + k] as usize, self.outcomes[k]);
-                self.apply(i, &outcome, &inputs, poses, &mut stats);
-            }
-        }
-        stats.seconds = start.elapsed().as_secs_f64();
-        Some(stats)
-    }
-
-    /// Verifying: checks every suspect that is not a seed (those the
-    /// ordered pass will most likely only check) ahead, in parallel chunks,
-    /// against the poses before the pass. Most checked feathers have no
-    /// obstacle that the pass changes before their turn, and their level
-    /// then takes this answer instead of checking again; it is the answer
-    /// the check would give there (same pose, same obstacles, same body),
-    /// so the result does not change, at any thread count. This spreads
-    /// the checks over the threads whatever the levels are: the obstacle
-    /// relation runs through thousands of levels of a few feathers.
-    fn precheck(&mut self, inputs: &Inputs<'_>, order: &[u32], poses: &[FeatherPose]) {
-        let Selection::Verify { seeds, suspects, .. } = inputs.selection else { return };
-        // Sized for every feather up front: how many are checked ahead
-        // varies from frame to frame, and the heap must not creep up.
-        let n = order.len();
-        self.precheck_items.clear();
-        self.precheck_items.reserve(n);
-        self.precheck_outcomes.reserve(n.saturating_sub(self.precheck_outcomes.len()));
-        self.precheck_items.extend(order.iter().copied().filter(|&i| {
-            let i = i as usize;
-            self.in_scope[i] && suspects[i] && !seeds[i]
-        }));
-        let items = &self.precheck_items;
-        self.precheck_outcomes.clear();
-        self.precheck_outcomes.resize(items.len(), Precheck::None);
-        let posed = Posed { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
-        let chunk = items.len().div_ceil(self.workers.len()).max(1);
-        items
-            .par_chunks(chunk)
-            .zip(self.precheck_outcomes.par_chunks_mut(chunk))
-            .zip(self.workers.par_iter_mut())
-            .for_each(|((items, outcomes), worker)| {
-                for (k, (&i, out)) in items.iter().zip(outcomes.iter_mut()).enumerate() {
-                    // Stopped: the rest stay unchecked (the run is abandoned).
-                    if k % 16 == 0 && !(inputs.keep_going)(0.0) {
-                        break;
-                    }
-                    let i = i as usize;
-                    collect_obstacle_ids(inputs, i, posed, worker);
-                    *out =
-                        if check_clear(inputs, i, poses, posed, worker) { Precheck::Clear } else { Precheck::Blocked };
-                }
-            });
-        for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
-            self.prechecked[i as usize] = outcome;
-        }
-    }
-
-    /// The transpose of `candidates` into the dependents: row j lists the
-    /// feathers whose candidates list j, in increasing order.
-    fn transpose(&mut self, candidates: CandidateLists<'_>) {
-        let n = candidates.len();
-        let starts = &mut self.dependent_offsets;
-        starts.clear();
-        starts.resize(n + 1, 0);
-        (0..n).flat_map(|i| candidates.of(i)).for_each(|&j| starts[j as usize] += 1);
-        let mut total = 0;
-        for s in starts.iter_mut() {
-            (*s, total) = (total, total + *s);
-        }
-        // Filled through the starts, which then hold each row's end: the
-        // start of the next.
-        self.dependents.clear();
-        self.dependents.resize(total as usize, 0);
-        for i in 0..n {
-            for &j in candidates.of(i) {
-                let at = &mut starts[j as usize];
-                self.dependents[*at as usize] = i as u32;
-                *at += 1;
-            }
-        }
-        starts.copy_within(0..n, 1);
-        starts[0] = 0;
+        Some(())
     }
 
     /// Records what became of feather `i`; an adjusted feather takes its
@@ -529,18 +364,6 @@ impl Adjuster {
         stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
     }
 
-    /// The scope of a sparse run to begin with: the selected feathers.
-    fn mark_selected(&mut self, n: usize, selection: Selection<'_>) {
-        self.in_scope.clear();
-        match selection {
-            Selection::All => self.in_scope.resize(n, true),
-            Selection::Subset(s) | Selection::Propagate { seeds: s, .. } => self.in_scope.extend_from_slice(s),
-            Selection::Verify { seeds, suspects, .. } => {
-                self.in_scope.extend(seeds.iter().zip(suspects).map(|(&s, &v)| s | v))
-            }
-        }
-    }
-
     /// Every feather's triangles at its current pose, and their spheres.
     /// Every feather's triangles, bounding sphere and obstacle boxes at its
     /// pose; once `keep_going` says stop the rest are left (the run is
@@ -573,88 +396,14 @@ impl Adjuster {
             });
     }
 
-    /// Marks the feathers that may be adjusted. With propagation that is
-    /// the seeds (and suspects) and everything downstream of them in the
-    /// obstacle relation.
-    fn mark_scope(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>, selection: Selection<'_>) {
-        let n = order.len();
-        self.in_scope.clear();
-        match selection {
-            Selection::All => self.in_scope.resize(n, true),
-            Selection::Subset(s) => self.in_scope.extend_from_slice(s),
-            Selection::Propagate { seeds, .. } | Selection::Verify { seeds, .. } => {
-                self.in_scope.extend_from_slice(seeds);
-                if let Selection::Verify { suspects, .. } = selection {
-                    self.in_scope.iter_mut().zip(suspects).for_each(|(s, &v)| *s |= v);
-                }
-                for &i in order {
-                    let i = i as usize;
-                    if !self.in_scope[i] {
-                        let ri = rank[i];
-                        self.in_scope[i] =
-                            candidates.of(i).iter().any(|&j| rank[j as usize] < ri && self.in_scope[j as usize]);
-                    }
-                }
-            }
+    /// Whether verification tests the pairs only: in a sparse run (see
+    /// [`Adjuster::adjust_sparse_until`]), unless a test says otherwise.
+    fn pairs_only_or(&self, sparse: bool) -> bool {
+        #[cfg(test)]
+        if let Some(pairs_only) = self.pairs_only {
+            return pairs_only;
         }
-    }
-
-    /// Levels of the feathers in scope and the per-level lists (each in
-    /// order). Returns the number of levels.
-    fn assign_levels(&mut self, order: &[u32], rank: &[u32], candidates: CandidateLists<'_>) -> usize {
-        let n = order.len();
-        self.level.clear();
-        self.level.resize(n, 0);
-        let mut levels = 0u32;
-        for &i in order {
-            let i = i as usize;
-            if !self.in_scope[i] {
-                continue;
-            }
-            let ri = rank[i];
-            let below = candidates
-                .of(i)
-                .iter()
-                .filter(|&&j| rank[j as usize] < ri)
-                .map(|&j| self.level[j as usize])
-                .max()
-                .unwrap_or(0);
-            self.level[i] = below + 1;
-            levels = levels.max(below + 1);
-        }
-        let levels = levels as usize;
-        // Level lists sized for the worst case (one feather per level, or
-        // all in one) from the start, so that sparse frames never grow them.
-        self.level_start.clear();
-        self.level_start.reserve(n + 1);
-        self.cursor.reserve(n.saturating_sub(self.cursor.len()));
-        self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
-        self.level_start.resize(levels + 1, 0);
-        for &i in order {
-            let l = self.level[i as usize] as usize;
-            if l > 0 {
-                self.level_start[l] += 1;
-            }
-        }
-        for l in 0..levels {
-            self.level_start[l + 1] += self.level_start[l];
-        }
-        self.level_items.clear();
-        self.level_items.resize(self.level_start[levels] as usize, 0);
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.level_start[..levels]);
-        for &i in order {
-            let l = self.level[i as usize] as usize;
-            if l > 0 {
-                self.level_items[self.cursor[l - 1] as usize] = i;
-                self.cursor[l - 1] += 1;
-            }
-        }
-        let widest = (0..levels).map(|l| (self.level_start[l + 1] - self.level_start[l]) as usize).max().unwrap_or(0);
-        if self.outcomes.len() < widest {
-            self.outcomes.resize(widest, Visit::Skipped);
-        }
-        levels
+        sparse
     }
 
     /// One scratch per possible work chunk of the current pool.
@@ -673,18 +422,25 @@ impl Adjuster {
 /// What an ordered run reads: every feather's root frame and shape, the
 /// adjustment `order` (`order[k]` is the k-th feather; `rank` is its
 /// inverse), each feather's `candidates` (roots within reach; its obstacles
-/// are those of smaller rank), the body, and the adjustment's parameters
-/// and steps. One entry per feather in each slice and row list.
+/// are those of smaller rank), the body, the adjustment's parameters and
+/// steps, and the settle rate. One entry per feather in each slice and row
+/// list.
 #[derive(Clone, Copy)]
 pub struct OrderedRun<'a> {
     pub frames: &'a [RootFrame],
     pub shapes: &'a [FeatherShape],
     pub order: &'a [u32],
     pub rank: &'a [u32],
-    pub candidates: CandidateLists<'a>,
+    pub candidates: CsrView<'a, u32>,
     pub body: &'a BodyIndex,
     pub params: &'a AdjustParams,
     pub steps: AdjustSteps,
+    /// Radians: each adjusted feather moves from its current pose toward
+    /// its solved pose by at most this in pitch, roll and each bend, when
+    /// that pose passes the exact checks; otherwise it lifts from there by
+    /// the smallest of a few pitch steps that passes, else takes the solved
+    /// pose (see [`crate::animation::coherence`]). 0 takes the solved pose.
+    pub settle_rate: f32,
 }
 
 /// Adjusts feathers in order with a temporary [`Adjuster`]: all of them, or

@@ -1,5 +1,6 @@
 use super::super::settle::SETTLED_TIP_GAP;
 use super::*;
+use crate::csr::CsrView;
 use crate::feather::tip_position;
 use crate::ordering::{NeighbourParams, Neighbourhoods};
 use crate::rng::Rng;
@@ -31,17 +32,17 @@ impl TwoFeathers {
     /// Adjusts the selected feathers with `adjuster`, settling at `rate`.
     fn run(&self, adjuster: &mut Adjuster, poses: &mut [FeatherPose], selection: Selection<'_>, rate: f32) {
         let (offsets, indices) = ([0u32, 1, 2], [1u32, 0]);
-        adjuster.settle_next_run(rate);
         adjuster.adjust_in_order(
             &OrderedRun {
                 frames: &self.frames,
                 shapes: &self.shapes,
                 order: &[0, 1],
                 rank: &[0, 1],
-                candidates: CandidateLists::new(&offsets, &indices),
+                candidates: CsrView::new(&offsets, &indices),
                 body: &self.body,
                 params: &self.params,
                 steps: AdjustSteps::Full,
+                settle_rate: rate,
             },
             poses,
             selection,
@@ -171,6 +172,31 @@ fn a_bent_feather_follows_a_slowly_rising_obstacle_without_popping() {
     assert!(worst <= 4.0 * rise, "B changed by {:.2}° in one frame", worst.to_degrees());
 }
 
+/// `w × h` roots about a unit apart on a gently waving patch, pointing
+/// along x.
+fn wavy_patch(rng: &mut Rng, w: usize, h: usize) -> Vec<RootFrame> {
+    (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
+            let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
+            RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
+        })
+        .collect()
+}
+
+/// An order with the tips first (the feathers farther along x are
+/// earlier), and its ranks.
+fn tips_first(frames: &[RootFrame]) -> (Vec<u32>, Vec<u32>) {
+    let n = frames.len();
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
+    let mut rank = vec![0u32; n];
+    for (k, &i) in order.iter().enumerate() {
+        rank[i as usize] = k as u32;
+    }
+    (order, rank)
+}
+
 /// A sparse run gives the poses, adjusted and verified flags of a run
 /// by levels over the same symmetric candidates; by levels, the checks
 /// made ahead on several threads change nothing either, nor does a
@@ -178,28 +204,15 @@ fn a_bent_feather_follows_a_slowly_rising_obstacle_without_popping() {
 #[test]
 fn a_sparse_run_matches_the_levels() {
     let mut rng = Rng::new(7);
-    let (w, h) = (14, 10);
-    let frames: Vec<RootFrame> = (0..w * h)
-        .map(|k| {
-            let (x, y) = ((k % w) as f32 + 0.3 * rng.next_f32(), (k / w) as f32 + 0.3 * rng.next_f32());
-            let normal = Vec3::new(0.1 * (x * 0.7).sin(), 0.1 * (y * 0.5).cos(), 1.0);
-            RootFrame::from_normal_and_direction(Vec3::new(x, y, 0.0), normal, Vec3::new(1.0, 0.2, 0.0)).unwrap()
-        })
-        .collect();
+    let frames = wavy_patch(&mut rng, 14, 10);
     let n = frames.len();
     let shapes = vec![FeatherShape::for_spacing(1.0); n];
     let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
     let mut nb = Neighbourhoods::new();
     nb.rebuild(&frames, &reach, &NeighbourParams::default());
     let (offsets, indices) = nb.obstacle_csr();
-    let candidates = CandidateLists::new(offsets, indices);
-    // Tips first: the feathers farther along x are earlier.
-    let mut order: Vec<u32> = (0..n as u32).collect();
-    order.sort_by(|&a, &b| frames[b as usize].position.x.total_cmp(&frames[a as usize].position.x).then(a.cmp(&b)));
-    let mut rank = vec![0u32; n];
-    for (k, &i) in order.iter().enumerate() {
-        rank[i as usize] = k as u32;
-    }
+    let candidates = CsrView::new(offsets, indices);
+    let (order, rank) = tips_first(&frames);
     let body = BodyIndex::from_mesh(
         &[
             Vec3::new(-5.0, -5.0, -0.05),
@@ -221,16 +234,17 @@ fn a_sparse_run_matches_the_levels() {
         body: &body,
         params: &params,
         steps: AdjustSteps::Full,
+        settle_rate: 0.0,
     };
     // The earlier candidates alone, as a frame's obstacle rows hold them
     // (a relation that is not symmetric).
     let mut earlier_offsets = vec![0u32];
     let mut earlier_indices = Vec::new();
     for i in 0..n {
-        earlier_indices.extend(candidates.of(i).iter().filter(|&&j| rank[j as usize] < rank[i]));
+        earlier_indices.extend(candidates.row(i).iter().filter(|&&j| rank[j as usize] < rank[i]));
         earlier_offsets.push(earlier_indices.len() as u32);
     }
-    let earlier_only = OrderedRun { candidates: CandidateLists::new(&earlier_offsets, &earlier_indices), ..ordered };
+    let earlier_only = OrderedRun { candidates: CsrView::new(&earlier_offsets, &earlier_indices), ..ordered };
     let all = adjuster.adjust_in_order(&ordered, &mut start, Selection::All);
     assert_eq!(all.adjusted, n);
     let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
@@ -252,9 +266,10 @@ fn a_sparse_run_matches_the_levels() {
             Selection::Propagate { seeds: &seeds, threshold },
         ] {
             let run_on = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, walk_share: usize| {
-                let mut adjuster = Adjuster { walk_share: Some(walk_share), ..Adjuster::new() };
+                let mut adjuster =
+                    Adjuster { walk_share: Some(walk_share), pairs_only: Some(pairs_only), ..Adjuster::new() };
                 let mut poses = poses.clone();
-                let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, (sparse, pairs_only)).unwrap();
+                let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, sparse).unwrap();
                 (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
             };
             let run = |sparse: bool, pairs_only: bool| run_on(&ordered, sparse, pairs_only, usize::MAX);

@@ -8,6 +8,7 @@ use super::super::settle::{SettlingFeather, settled_pose};
 use super::super::steps::adjust_feather_boxed;
 use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
+use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
@@ -18,39 +19,6 @@ use rayon::prelude::*;
 /// feather's grow from the far side of a thin part (see
 /// [`ObstacleFeather::far_side`]).
 const FAR_SIDE_NORMAL_DOT: f32 = -0.5;
-
-/// Candidate lists in compressed rows: the candidates of root `i` are
-/// `indices[offsets[i]..offsets[i + 1]]` (roots within reach, any order).
-#[derive(Clone, Copy, Debug)]
-pub struct CandidateLists<'a> {
-    /// Row starts, one more than the number of roots.
-    pub offsets: &'a [u32],
-    /// Concatenated candidate indices.
-    pub indices: &'a [u32],
-}
-
-impl<'a> CandidateLists<'a> {
-    /// Wraps CSR arrays.
-    pub fn new(offsets: &'a [u32], indices: &'a [u32]) -> Self {
-        Self { offsets, indices }
-    }
-
-    /// The candidates of root `i`.
-    #[inline]
-    pub fn of(&self, i: usize) -> &'a [u32] {
-        &self.indices[self.offsets[i] as usize..self.offsets[i + 1] as usize]
-    }
-
-    /// Number of roots described.
-    pub fn len(&self) -> usize {
-        self.offsets.len().saturating_sub(1)
-    }
-
-    /// Whether no root is described.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
 
 /// Which feathers an ordered adjustment touches.
 #[derive(Clone, Copy, Debug)]
@@ -135,14 +103,14 @@ pub(super) struct Inputs<'a> {
     pub(super) frames: &'a [RootFrame],
     pub(super) shapes: &'a [FeatherShape],
     pub(super) rank: &'a [u32],
-    pub(super) candidates: CandidateLists<'a>,
+    pub(super) candidates: CsrView<'a, u32>,
     pub(super) body: &'a BodyIndex,
     pub(super) params: &'a AdjustParams,
     pub(super) steps: AdjustSteps,
     pub(super) selection: Selection<'a>,
     /// Verification tests the pairs only (see [`super::Adjuster::adjust_sparse_until`]).
     pub(super) pairs_only: bool,
-    /// See [`super::Adjuster::settle_next_run`]; 0 = the solved poses.
+    /// See [`super::OrderedRun::settle_rate`]; 0 = the solved poses.
     pub(super) settle_rate: f32,
     /// Asked (with the share done) between feathers; once it says stop,
     /// the run is abandoned and its remaining feathers are not visited.
@@ -158,7 +126,7 @@ pub(super) enum Visit {
     Verified,
     /// It was adjusted: the pose it takes, and the pose solved for it
     /// (the same unless it settles toward it, see
-    /// [`super::Adjuster::settle_next_run`]).
+    /// [`super::OrderedRun::settle_rate`]).
     Adjusted(AdjustOutcome, FeatherPose),
 }
 
@@ -174,7 +142,7 @@ pub(super) struct Marks<'a> {
 
 /// Every feather's triangles at its current pose and a sphere around them.
 #[derive(Clone, Copy)]
-pub(super) struct Posed<'a> {
+pub(super) struct PosedGeometry<'a> {
     pub(super) triangles: &'a [FeatherTriangles],
     pub(super) spheres: &'a [(Vec3, f32)],
     pub(super) boxes: &'a [ObstacleBoxes],
@@ -197,7 +165,7 @@ pub(super) fn run_level(
     inputs: &Inputs<'_>,
     Level { items, done }: Level<'_>,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     marks: Marks<'_>,
     outcomes: &mut [Visit],
     workers: &mut [Worker],
@@ -234,12 +202,12 @@ pub(super) fn adjust_one(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     marks: Marks<'_>,
     worker: &mut Worker,
 ) -> Visit {
     let ri = inputs.rank[i];
-    let earlier = inputs.candidates.of(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
+    let earlier = inputs.candidates.row(i).iter().map(|&j| j as usize).filter(|&j| inputs.rank[j] < ri);
     let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let mut verify = false;
     if let Some(seeds) = inputs.selection.seeds()
@@ -305,14 +273,14 @@ pub(super) fn adjust_one(
 
 /// Fills `worker.obstacle_ids` with feather `i`'s earlier candidates that
 /// may matter to it at some size and pose (see [`ObstacleReach`]).
-pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: Posed<'_>, worker: &mut Worker) {
+pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: PosedGeometry<'_>, worker: &mut Worker) {
     let ri = inputs.rank[i];
     let reach = ObstacleReach::new(&inputs.frames[i], &inputs.shapes[i], inputs.params);
     worker.obstacle_ids.clear();
     worker.obstacle_ids.extend(
         inputs
             .candidates
-            .of(i)
+            .row(i)
             .iter()
             .map(|&j| j as usize)
             .filter(|&j| inputs.rank[j] < ri)
@@ -331,7 +299,7 @@ pub(super) fn check_clear(
     inputs: &Inputs<'_>,
     i: usize,
     poses: &[FeatherPose],
-    posed: Posed<'_>,
+    posed: PosedGeometry<'_>,
     worker: &mut Worker,
 ) -> bool {
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
