@@ -12,6 +12,17 @@ if ! command -v cargo >/dev/null 2>&1; then
   exit 1
 fi
 
+# Clippy lints every target in the test command: added with rustup when
+# the toolchain lacks it.
+if ! cargo clippy --version >/dev/null 2>&1; then
+  if command -v rustup >/dev/null 2>&1; then
+    rustup component add clippy
+  else
+    echo "error: cargo clippy is missing and rustup is not there to add it: install clippy for your toolchain." >&2
+    exit 1
+  fi
+fi
+
 missing=()
 command -v cmake >/dev/null 2>&1 || missing+=(cmake)
 command -v g++ >/dev/null 2>&1 || missing+=(g++)

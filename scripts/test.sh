@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every test: the Rust tests (unit, integration, header drift), then the
+# Runs every test: the Rust tests (unit, integration, header drift) and clippy, then the
 # C++ tests under ctest, in a normal build and in an ASan+UBSan build, and the
 # installed library from a separate consumer project (scripts/consumer_test.sh,
 # then from a library-only build: scripts/library_only_test.sh),
@@ -11,6 +11,9 @@ export PATH="$HOME/.cargo/bin:$PATH"
 
 echo "== cargo test (release profile: the model tests are heavy)"
 cargo test --release --all-targets
+
+echo "== clippy: every target, warnings are errors"
+cargo clippy --release --all-targets -- -D warnings
 
 echo "== C++ build and ctest"
 cmake -S cpp_examples -B build -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
