@@ -890,10 +890,9 @@ class MeshScene:
         at = self._morphed(self.base_weights)
         return to_float32(self._posed(at + d, maps) - self._posed(at, maps))
 
-    def skeleton(self) -> Optional[Skeleton]:
-        """The skin's joints at rest and each vertex's JOINTS_0/WEIGHTS_0 (None for a mesh without a skin)."""
-        if not self.skinned:
-            return None
+    def _skin_joints(self) -> Tuple[List[int], npt.NDArray[np.float64]]:
+        """Each joint's parent within the skin (its nearest ancestor that is a joint, -1 for none) and its world
+        position at rest (the translation of its global transform), as GltfScene::skeleton() takes them."""
         glob = self._global_transforms(self.nodes)
         index = {node: k for k, node in enumerate(self.joints)}
         parents = []
@@ -902,7 +901,13 @@ class MeshScene:
             while up >= 0 and up not in index:
                 up = self.parent[up]
             parents.append(index[up] if up >= 0 else -1)
-        rest = np.array([[glob[j][12], glob[j][13], glob[j][14]] for j in self.joints], np.float64)
+        return parents, np.array([[glob[j][12], glob[j][13], glob[j][14]] for j in self.joints], np.float64)
+
+    def skeleton(self) -> Optional[Skeleton]:
+        """The skin's joints at rest and each vertex's JOINTS_0/WEIGHTS_0 (None for a mesh without a skin)."""
+        if not self.skinned:
+            return None
+        parents, rest = self._skin_joints()
         joints, weights = [], []
         f = self.file
         for i, p in enumerate(f.meshes[self.mesh_index].primitives or []):
@@ -916,15 +921,8 @@ class MeshScene:
         """The skeleton plumage_gltf hands the library for this mesh (GltfScene::skeleton()), None without a skin."""
         if not self.skinned:
             return None
-        glob = self._global_transforms(self.nodes)
-        index = {node: k for k, node in enumerate(self.joints)}
-        parents = []
-        for node in self.joints:
-            up = self.parent[node]
-            while up >= 0 and up not in index:
-                up = self.parent[up]
-            parents.append(index[up] if up >= 0 else -1)
-        positions = np.array([[glob[j][12], glob[j][13], glob[j][14]] for j in self.joints], np.float64).astype(np.float32)
+        parents, rest = self._skin_joints()
+        positions = rest.astype(np.float32)
         used = self.influence_joint >= 0
         order = np.argsort(~used, axis=1, kind="stable")  # the used slots first, in slot order
         joints = np.take_along_axis(self.influence_joint, order, axis=1)
