@@ -577,7 +577,8 @@ typedef struct PlumageFeatherType {
  * positions in the pose the rest positions were taken in). Joints no
  * vertex is weighted to and with no weighted ancestor are ignored; each
  * remaining tree of joints is walked from its head, so that every bone
- * points away from it.
+ * points away from it. A skeleton whose weighted joints have no bone
+ * leaves the flow axis.
  */
 typedef struct PlumageSkeleton {
   /**
@@ -589,11 +590,13 @@ typedef struct PlumageSkeleton {
    */
   uint32_t influences;
   /**
-   * xyz per joint, `3 * joint_count` floats.
+   * xyz per joint, `3 * joint_count` floats (finite, within the
+   * coordinate range the positions have).
    */
   const float *joint_positions;
   /**
-   * Per joint, its parent's index, or -1 for a root.
+   * Per joint, its parent's index, or -1 for a root; no cycles, and at
+   * most 255 children to a joint (PLUMAGE_STATUS_LIMIT_EXCEEDED).
    */
   const int32_t *joint_parents;
   /**

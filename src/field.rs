@@ -88,11 +88,13 @@ impl Fields {
                 let axis = if config.flow_axis == Vec3::ZERO { principal_flow_axis(mesh) } else { config.flow_axis };
                 let flow = match (config.flow_source, maps.skeleton_flow) {
                     (Some(source), _) => flow_from_source(mesh, surface, source, axis),
-                    (None, Some(bones)) => {
+                    // A skeleton whose bones give no direction anywhere (no
+                    // vertex weighted to a joint with a bone) leaves the axis.
+                    (None, Some(bones)) if bones.iter().any(|&x| x != 0.0) => {
                         check_values("skeleton flow", bones, 3 * n, false)?;
                         bones.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect()
                     }
-                    (None, None) => vec![axis; n],
+                    (None, _) => vec![axis; n],
                 };
                 let mut dirs = project_onto_tangent_planes(&flow, normals);
                 fill_from_neighbours(surface, normals, &mut dirs);

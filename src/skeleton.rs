@@ -26,6 +26,11 @@ pub(crate) const MAX_JOINTS: usize = 1 << 16;
 /// The most joints one vertex may be weighted to.
 pub(crate) const MAX_INFLUENCES: usize = 16;
 
+/// The most child joints one joint may have: a vertex's flow looks at every
+/// bone meeting each joint it is weighted to, so this bounds the work per
+/// vertex (real skeletons branch a handful of times at a joint).
+pub(crate) const MAX_CHILDREN: usize = 255;
+
 /// The direction the head is looked for along: against the flow axis when
 /// one is set (it runs from the front to the back), else glTF's up and
 /// forward (+Y and +Z) together, so that a standing figure's head and a
@@ -73,6 +78,11 @@ impl SkeletonInput<'_> {
         if let Some(i) = self.joint_positions.iter().position(|x| !x.is_finite()) {
             return bad(ErrorKind::NonFinite, format!("joint {} has a non-finite position", i / 3));
         }
+        let limit = crate::limits::MAX_COORDINATE;
+        if let Some(i) = self.joint_positions.iter().position(|x| x.abs() > limit) {
+            let text = format!("joint {} lies beyond the supported magnitude {limit:e} model units", i / 3);
+            return bad(ErrorKind::LimitExceeded, text);
+        }
         if !(1..=MAX_INFLUENCES).contains(&self.influences) {
             let n = self.influences;
             return bad(
@@ -109,6 +119,14 @@ impl SkeletonInput<'_> {
         }
         if depths(self.joint_parents).is_none() {
             return bad(ErrorKind::InvalidArgument, "the joints' parents form a cycle".into());
+        }
+        let mut children = vec![0usize; joints];
+        for &p in self.joint_parents.iter().filter(|&&p| p >= 0) {
+            children[p as usize] += 1;
+        }
+        if let Some(j) = children.iter().position(|&c| c > MAX_CHILDREN) {
+            let c = children[j];
+            return bad(ErrorKind::LimitExceeded, format!("joint {j} has {c} child joints; at most {MAX_CHILDREN}"));
         }
         Ok(())
     }
@@ -374,6 +392,10 @@ mod tests {
         assert!(skeleton(&nan_joint, &parents, &vj, &vw).check(1).is_err(), "non-finite joint");
         assert!(SkeletonInput { head_joint: 9, ..ok }.check(1).is_err(), "head out of range");
         assert!(SkeletonInput { influences: 0, ..ok }.check(1).is_err(), "no influences");
+        let star_parents: Vec<i32> = (0..300).map(|j| if j == 0 { -1 } else { 0 }).collect();
+        let star_joints = vec![0.0f32; 3 * 300];
+        let star = skeleton(&star_joints, &star_parents, &vj, &vw);
+        assert_eq!(star.check(1).unwrap_err().kind(), ErrorKind::LimitExceeded, "a joint with 299 children");
     }
 
     #[test]

@@ -216,6 +216,26 @@ fn a_constant_layer_map_changes_nothing() {
 }
 
 #[test]
+fn a_skeleton_without_weights_leaves_the_flow_axis() {
+    let c = character::character();
+    let (joints, parents) = (character::joint_positions(), character::joint_parents());
+    let weightless = vec![0.0f32; c.vertex_weights.len()];
+    let skeleton = SkeletonInput {
+        joint_positions: &joints,
+        joint_parents: &parents,
+        influences: INFLUENCES,
+        vertex_joints: &c.vertex_joints,
+        vertex_weights: &weightless,
+        head_joint: -1,
+    };
+    let config = Config { target_feathers: 500, ..Config::default() };
+    let plain = System::new(&config, &MeshInput::new(&c.shape.positions, &c.shape.indices)).unwrap();
+    let mesh = MeshInput { skeleton: Some(skeleton), ..MeshInput::new(&c.shape.positions, &c.shape.indices) };
+    let weightless = System::new(&config, &mesh).unwrap();
+    assert_eq!(plain.feather_triangles(), weightless.feather_triangles());
+}
+
+#[test]
 fn bad_layers_and_skeletons_are_refused() {
     let s = sphere(8, 12);
     let n = s.vertex_count();

@@ -81,7 +81,8 @@ impl From<crate::feather::FeatherType> for PlumageFeatherType {
 /// positions in the pose the rest positions were taken in). Joints no
 /// vertex is weighted to and with no weighted ancestor are ignored; each
 /// remaining tree of joints is walked from its head, so that every bone
-/// points away from it.
+/// points away from it. A skeleton whose weighted joints have no bone
+/// leaves the flow axis.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct PlumageSkeleton {
@@ -89,9 +90,11 @@ pub struct PlumageSkeleton {
     pub joint_count: u32,
     /// Joints each vertex is weighted to (1 to 16; glTF's JOINTS_0 gives 4).
     pub influences: u32,
-    /// xyz per joint, `3 * joint_count` floats.
+    /// xyz per joint, `3 * joint_count` floats (finite, within the
+    /// coordinate range the positions have).
     pub joint_positions: *const f32,
-    /// Per joint, its parent's index, or -1 for a root.
+    /// Per joint, its parent's index, or -1 for a root; no cycles, and at
+    /// most 255 children to a joint (PLUMAGE_STATUS_LIMIT_EXCEEDED).
     pub joint_parents: *const i32,
     /// `influences` joint indices per vertex (`influences * vertex_count`).
     pub vertex_joints: *const u32,
