@@ -275,6 +275,20 @@ fn case(rng: &mut Rng, tally: &mut Tally) {
         }
     }
     keep_small(&mut cfg, &m, (!d.spacing_scale.is_null()).then_some(&maps[1][..]));
+    // The groom's inputs: a layer map, a skeleton and a type map, each
+    // sometimes wrong (cycles, indices out of range, nasty values).
+    let groom = GroomInputs::new(rng, n);
+    if rng.chance(0.15) {
+        d.layer = groom.layer.as_ptr();
+    }
+    if rng.chance(0.2) {
+        d.skeleton = &groom.skeleton;
+    }
+    if rng.chance(0.15) {
+        d.feather_type = groom.kinds.as_ptr();
+        d.feather_types = if rng.chance(0.05) { null() } else { groom.types.as_ptr() };
+        d.feather_type_count = if rng.chance(0.05) { rng.below(300) as u32 } else { groom.types.len() as u32 };
+    }
     match rng.below(40) {
         0 => d.positions = null(),
         1 => d.indices = null(),
@@ -309,6 +323,85 @@ fn case(rng: &mut Rng, tally: &mut Tally) {
     let st = unsafe { plumage_system_step(sys, frame.as_ptr(), frame.len() / 3) };
     tally.saw("step", st);
     fuzz::assert_finite(sys, "after a step");
+}
+
+/// The arrays of a fuzzed layer map, skeleton and type map (kept alive
+/// for the call that reads them through the mesh description).
+struct GroomInputs {
+    layer: Vec<f32>,
+    joints: Vec<f32>,
+    parents: Vec<i32>,
+    vertex_joints: Vec<u32>,
+    vertex_weights: Vec<f32>,
+    kinds: Vec<u32>,
+    types: Vec<PlumageFeatherType>,
+    skeleton: PlumageSkeleton,
+}
+
+impl GroomInputs {
+    fn new(rng: &mut Rng, n: usize) -> Box<Self> {
+        let nasty = |rng: &mut Rng, v: &mut Vec<f32>| {
+            if rng.chance(0.2) && !v.is_empty() {
+                let k = rng.below(v.len());
+                v[k] = rng.nasty_f32();
+            }
+        };
+        let mut layer: Vec<f32> = (0..n).map(|_| rng.below(3) as f32).collect();
+        nasty(rng, &mut layer);
+        let joint_count = 1 + rng.below(12);
+        let mut joints: Vec<f32> = (0..3 * joint_count).map(|_| rng.range(-1.0, 1.0)).collect();
+        nasty(rng, &mut joints);
+        let mut parents: Vec<i32> = (0..joint_count).map(|j| if j == 0 { -1 } else { rng.below(j) as i32 }).collect();
+        if rng.chance(0.1) {
+            let j = rng.below(joint_count);
+            parents[j] = rng.below(joint_count + 2) as i32 - 1; // maybe a cycle or out of range
+        }
+        let influences = 1 + rng.below(4);
+        let wrong_joint = rng.chance(0.05);
+        let vertex_joints: Vec<u32> =
+            (0..influences * n).map(|_| rng.below(joint_count + usize::from(wrong_joint)) as u32).collect();
+        let mut vertex_weights: Vec<f32> = (0..influences * n).map(|_| rng.range(0.0, 1.0)).collect();
+        nasty(rng, &mut vertex_weights);
+        let type_count = 1 + rng.below(3);
+        let wrong_type = usize::from(rng.chance(0.05));
+        let kinds: Vec<u32> = (0..n).map(|_| rng.below(type_count + wrong_type) as u32).collect();
+        let mut types: Vec<PlumageFeatherType> = (0..type_count)
+            .map(|_| PlumageFeatherType {
+                length_per_spacing: rng.range(0.0, 6.0),
+                width_per_spacing: rng.range(0.0, 3.0),
+                thickness_scale: rng.range(0.0, 2.0),
+            })
+            .collect();
+        if rng.chance(0.1) {
+            types[0].width_per_spacing = rng.nasty_f32();
+        }
+        let mut inputs = Box::new(Self {
+            layer,
+            joints,
+            parents,
+            vertex_joints,
+            vertex_weights,
+            kinds,
+            types,
+            skeleton: PlumageSkeleton {
+                joint_count: joint_count as u32,
+                influences: influences as u32,
+                joint_positions: null(),
+                joint_parents: null(),
+                vertex_joints: null(),
+                vertex_weights: null(),
+                head_joint: rng.below(joint_count + 2) as i32 - 1,
+            },
+        });
+        inputs.skeleton.joint_positions = inputs.joints.as_ptr();
+        inputs.skeleton.joint_parents = inputs.parents.as_ptr();
+        inputs.skeleton.vertex_joints = inputs.vertex_joints.as_ptr();
+        inputs.skeleton.vertex_weights = inputs.vertex_weights.as_ptr();
+        if rng.chance(0.05) {
+            inputs.skeleton.vertex_weights = null();
+        }
+        inputs
+    }
 }
 
 #[test]
