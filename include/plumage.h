@@ -595,8 +595,7 @@ typedef struct PlumageSkeleton {
    */
   const float *joint_positions;
   /**
-   * Per joint, its parent's index, or -1 for a root; no cycles, and at
-   * most 255 children to a joint (PLUMAGE_STATUS_LIMIT_EXCEEDED).
+   * Per joint, its parent's index, or -1 for a root; no cycles.
    */
   const int32_t *joint_parents;
   /**

@@ -26,10 +26,11 @@ pub(crate) const MAX_JOINTS: usize = 1 << 16;
 /// The most joints one vertex may be weighted to.
 pub(crate) const MAX_INFLUENCES: usize = 16;
 
-/// The most child joints one joint may have: a vertex's flow looks at every
-/// bone meeting each joint it is weighted to, so this bounds the work per
-/// vertex (real skeletons branch a handful of times at a joint).
-pub(crate) const MAX_CHILDREN: usize = 255;
+/// The most bones at one joint whose nearness is weighed: a vertex's flow
+/// looks at every bone meeting each joint it is weighted to, so at a joint
+/// with more (a rig's root with hundreds of children) only the bone coming
+/// from the head is taken, and the work per vertex stays bounded.
+const MAX_BONES_BLENDED: usize = 64;
 
 /// The direction the head is looked for along: against the flow axis when
 /// one is set (it runs from the front to the back), else glTF's up and
@@ -119,14 +120,6 @@ impl SkeletonInput<'_> {
         }
         if depths(self.joint_parents).is_none() {
             return bad(ErrorKind::InvalidArgument, "the joints' parents form a cycle".into());
-        }
-        let mut children = vec![0usize; joints];
-        for &p in self.joint_parents.iter().filter(|&&p| p >= 0) {
-            children[p as usize] += 1;
-        }
-        if let Some(j) = children.iter().position(|&c| c > MAX_CHILDREN) {
-            let c = children[j];
-            return bad(ErrorKind::LimitExceeded, format!("joint {j} has {c} child joints; at most {MAX_CHILDREN}"));
         }
         Ok(())
     }
@@ -280,10 +273,16 @@ impl Bones {
     }
 
     /// The unit direction of the bones at joint `j` as seen from `p`: each
-    /// bone weighted by `1 / (distance² + soft²)²` to its segment. Zero when
-    /// no bone meets `j`.
+    /// bone weighted by `1 / (distance² + soft²)²` to its segment (beyond
+    /// [`MAX_BONES_BLENDED`] bones, the incoming one alone). Zero when no
+    /// bone meets `j`.
     fn direction_at(&self, j: usize, p: Vec3) -> Vec3 {
-        let bones = &self.at[self.at_start[j] as usize..self.at_start[j + 1] as usize];
+        let mut bones = &self.at[self.at_start[j] as usize..self.at_start[j + 1] as usize];
+        if bones.len() > MAX_BONES_BLENDED {
+            // The bone that ends at `j` (the one from the head's side), if any.
+            let incoming = bones.iter().position(|&b| self.to[b as usize] as usize == j);
+            bones = incoming.map_or(&[][..], |k| &bones[k..=k]);
+        }
         let blend = bones.iter().fold(Vec3::ZERO, |sum, &b| {
             let (a, c) = (self.joints[self.from[b as usize] as usize], self.joints[self.to[b as usize] as usize]);
             let Some(dir) = (c - a).try_normalize() else { return sum };
@@ -392,10 +391,29 @@ mod tests {
         assert!(skeleton(&nan_joint, &parents, &vj, &vw).check(1).is_err(), "non-finite joint");
         assert!(SkeletonInput { head_joint: 9, ..ok }.check(1).is_err(), "head out of range");
         assert!(SkeletonInput { influences: 0, ..ok }.check(1).is_err(), "no influences");
-        let star_parents: Vec<i32> = (0..300).map(|j| if j == 0 { -1 } else { 0 }).collect();
-        let star_joints = vec![0.0f32; 3 * 300];
-        let star = skeleton(&star_joints, &star_parents, &vj, &vw);
-        assert_eq!(star.check(1).unwrap_err().kind(), ErrorKind::LimitExceeded, "a joint with 299 children");
+        let mut big = joints.clone();
+        big[4] = 2e9;
+        assert_eq!(skeleton(&big, &parents, &vj, &vw).check(1).unwrap_err().kind(), ErrorKind::LimitExceeded);
+    }
+
+    #[test]
+    fn a_joint_with_hundreds_of_children_takes_its_incoming_bone() {
+        // A chain 0 → 1 (up the y axis) and 300 children of 1 spread round it.
+        let mut joints = vec![0.0f32, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let mut parents = vec![-1i32, 0];
+        for k in 0..300 {
+            let a = k as f32 * 0.02;
+            joints.extend_from_slice(&[a.cos(), 1.0, a.sin()]);
+            parents.push(1);
+        }
+        // Vertex 0 on joint 1, vertex 1 on joint 0 (so that 0 is not a
+        // weightless root, dropped).
+        let (vj, vw) = ([1u32, 0], [1.0f32, 1.0]);
+        let mut s = skeleton(&joints, &parents, &vj, &vw);
+        s.head_joint = 0;
+        s.check(2).unwrap();
+        let flow = s.flow_hints(&[0.1, 0.9, 0.0, 0.1, 0.1, 0.0], Vec3::Y)[0].normalize();
+        assert!(flow.dot(Vec3::Y) > 0.99, "the bone from the head: {flow:?}");
     }
 
     #[test]

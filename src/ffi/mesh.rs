@@ -93,8 +93,7 @@ pub struct PlumageSkeleton {
     /// xyz per joint, `3 * joint_count` floats (finite, within the
     /// coordinate range the positions have).
     pub joint_positions: *const f32,
-    /// Per joint, its parent's index, or -1 for a root; no cycles, and at
-    /// most 255 children to a joint (PLUMAGE_STATUS_LIMIT_EXCEEDED).
+    /// Per joint, its parent's index, or -1 for a root; no cycles.
     pub joint_parents: *const i32,
     /// `influences` joint indices per vertex (`influences * vertex_count`).
     pub vertex_joints: *const u32,
