@@ -17,8 +17,8 @@ use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
 use crate::surface::Surface;
 use glam::Vec3;
 
+mod blob;
 mod staleness;
-mod state;
 
 pub use staleness::{Oriented, Placement, Staleness, orientation};
 

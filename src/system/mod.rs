@@ -20,7 +20,7 @@ use crate::workers::WorkerPool;
 use glam::Vec3;
 use std::collections::BTreeMap;
 
-mod state;
+mod blob;
 mod validate;
 
 /// A feathered surface: created at the rest pose, then stepped frame by frame.

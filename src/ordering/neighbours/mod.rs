@@ -27,9 +27,9 @@
 //! reaching round the rim of a wing can meet one from the other skin, and
 //! the adjustment checks those exactly.
 
+mod blob;
 mod params;
 mod rows;
-mod state;
 crate::memory::heap_size_of_fields!(Neighbourhoods {
     tree, knn_offsets, knn_indices, pairs, obstacles, pair_buckets, leaf_ids, leaf_starts, points, cells, nodes, chunks, #[cfg(test)] scratch_indices
 } plain { layout_generation, layout_roots, layout_spread, tree_current });
