@@ -83,10 +83,10 @@ impl Scene {
         let dressing = Dressing::new(surface, &mesh, sampling.roots, &config);
         let mut coat = Coat::default();
         solve(&mut coat, &dressing, &mesh.positions, &mut Workspace::default(), &Progress::none()).ok()?;
-        let (offsets, candidates) = coat.neighbourhoods.obstacle_csr();
+        let rows = coat.neighbourhoods.obstacle_csr();
         Some(Scene {
-            offsets: offsets.to_vec(),
-            candidates: candidates.to_vec(),
+            offsets: rows.offsets().to_vec(),
+            candidates: rows.items().to_vec(),
             order: coat.order.order().to_vec(),
             rank: coat.order.ranks().to_vec(),
             body: coat.body,

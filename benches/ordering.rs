@@ -80,8 +80,8 @@ fn benches(c: &mut Criterion) {
     });
     eprintln!(
         "obstacle candidates: {} (mean {:.1} per root)",
-        with_obstacles.obstacle_csr().1.len(),
-        with_obstacles.obstacle_csr().1.len() as f64 / ROOTS as f64
+        with_obstacles.obstacle_csr().len(),
+        with_obstacles.obstacle_csr().len() as f64 / ROOTS as f64
     );
 
     let mut deltas = Vec::new();

@@ -131,7 +131,12 @@ class Crate:
         for mod in self.top:
             d = os.path.join(self.src, mod)
             if os.path.isdir(d):
-                stems = sorted(f[:-3] for f in os.listdir(d) if f.endswith(".rs"))
+                # `<file>_tests.rs`: a file's unit tests (`#[path]` beside it).
+                stems = sorted(
+                    f[:-3]
+                    for f in os.listdir(d)
+                    if f.endswith(".rs") and (with_tests or not f.endswith("_tests.rs"))
+                )
                 self.children[mod] = set(stems) - {"mod"}
                 for stem in stems:
                     self.files[(mod, stem)] = self.read(os.path.join(d, stem + ".rs"))

@@ -16,7 +16,7 @@ use std::ops::Range;
 
 /// Compressed rows held elsewhere, borrowed: row `r` is
 /// `items[offsets[r]..offsets[r + 1]]`.
-#[derive(Debug)]
+#[derive(Debug, PartialEq, Eq)]
 pub struct CsrView<'a, T> {
     offsets: &'a [u32],
     items: &'a [T],
@@ -130,6 +130,12 @@ impl<T: Copy + Default> Csr<T> {
         self.offsets[r + 1] += 1;
     }
 
+    /// First pass: `n` more items for row `r`.
+    #[inline]
+    pub fn count_many(&mut self, r: usize, n: usize) {
+        self.offsets[r + 1] += n as u32;
+    }
+
     /// Between the passes: turns the counts into offsets and sizes the items.
     pub fn allocate(&mut self) {
         let rows = self.rows();
@@ -148,6 +154,15 @@ impl<T: Copy + Default> Csr<T> {
         let slot = &mut self.cursor[r];
         self.items[*slot as usize] = item;
         *slot += 1;
+    }
+
+    /// Second pass: the next items of row `r` (as many per row as counted).
+    #[inline]
+    pub fn place_all(&mut self, r: usize, items: &[T]) {
+        let slot = &mut self.cursor[r];
+        let at = *slot as usize;
+        self.items[at..at + items.len()].copy_from_slice(items);
+        *slot += items.len() as u32;
     }
 
     /// Number of rows.
@@ -246,6 +261,18 @@ mod tests {
         csr.place(1, 'z');
         assert_eq!((csr.rows(), csr.row(0).len(), csr.row(1)), (2, 0, &['z'][..]));
         csr.row_mut(1)[0] = 'y';
+        assert_eq!(csr.items(), &['y']);
+        csr.begin(3);
+        csr.count_many(2, 2);
+        csr.count(0);
+        csr.allocate();
+        csr.place_all(2, &['p', 'q']);
+        csr.place(0, 'o');
+        assert_eq!((csr.offsets(), csr.items()), (&[0, 1, 1, 3][..], &['o', 'p', 'q'][..]));
+        csr.begin(1);
+        csr.count(0);
+        csr.allocate();
+        csr.place(0, 'y');
         assert_eq!(csr.items(), &['y']);
         assert!(Csr::<u32>::new().row(0).is_empty() && Csr::<u32>::new().rows() == 0);
     }

@@ -4,7 +4,7 @@
 mod common;
 
 use common::character::{self, INFLUENCES, LIMBS};
-use common::shapes::Shape;
+use common::shapes::uv_sphere;
 use glam::Vec3;
 use plumage::{Config, MeshInput, SkeletonInput, System};
 
@@ -74,34 +74,6 @@ fn the_skinned_character_is_groomed_and_collision_free_at_rest_and_walking() {
             );
         }
     }
-}
-
-/// A UV sphere of radius 1 round the origin with a ring of vertices on the
-/// equator (z = 0), poles on ±z.
-fn sphere(rings: usize, sides: usize) -> Shape {
-    assert!(rings % 2 == 0);
-    let mut s = Shape::default();
-    s.positions.extend_from_slice(&[0.0, 0.0, -1.0]);
-    for r in 1..rings {
-        let polar = std::f32::consts::PI * r as f32 / rings as f32;
-        let z = if 2 * r == rings { 0.0 } else { -polar.cos() };
-        for k in 0..sides {
-            let a = std::f32::consts::TAU * k as f32 / sides as f32;
-            s.positions.extend_from_slice(&[polar.sin() * a.cos(), polar.sin() * a.sin(), z]);
-        }
-    }
-    s.positions.extend_from_slice(&[0.0, 0.0, 1.0]);
-    let top = (s.positions.len() / 3 - 1) as u32;
-    let ring = |r: usize, k: usize| (1 + (r - 1) * sides + k % sides) as u32;
-    for k in 0..sides {
-        s.indices.extend_from_slice(&[0, ring(1, k + 1), ring(1, k)]);
-        for r in 1..rings - 1 {
-            let (a, b, c, d) = (ring(r, k), ring(r, k + 1), ring(r + 1, k + 1), ring(r + 1, k));
-            s.indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-        s.indices.extend_from_slice(&[top, ring(rings - 1, k), ring(rings - 1, k + 1)]);
-    }
-    s
 }
 
 /// Möller–Trumbore: whether the ray `o + t d`, t > 0, meets the triangle.
@@ -174,7 +146,7 @@ fn lower_half_on_top(system: &System) -> usize {
 
 #[test]
 fn a_painted_layer_puts_its_half_of_a_sphere_on_top_across_the_border() {
-    let s = sphere(24, 48);
+    let s = uv_sphere(24, 48);
     let layer: Vec<f32> = s.positions.chunks_exact(3).map(|p| if p[2] >= 0.0 { 1.0 } else { 0.0 }).collect();
     for seed in [1, 2] {
         // The flow runs from the lower half into the upper one, so that the
@@ -204,7 +176,7 @@ fn a_painted_layer_puts_its_half_of_a_sphere_on_top_across_the_border() {
 
 #[test]
 fn a_constant_layer_map_changes_nothing() {
-    let s = sphere(16, 32);
+    let s = uv_sphere(16, 32);
     // 3.0 blended at a root (3 b0 + 3 b1 + 3 b2) need not be exactly 3.0.
     let layer = vec![3.0f32; s.vertex_count()];
     let config = Config { target_feathers: 600, ..Config::default() };
@@ -237,7 +209,7 @@ fn a_skeleton_without_weights_leaves_the_flow_axis() {
 
 #[test]
 fn bad_layers_and_skeletons_are_refused() {
-    let s = sphere(8, 12);
+    let s = uv_sphere(8, 12);
     let n = s.vertex_count();
     let config = Config { target_feathers: 100, ..Config::default() };
     let mut layer = vec![0.0f32; n];

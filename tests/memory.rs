@@ -8,62 +8,18 @@
 
 mod common;
 
+use common::counting::{Counting, LIVE, PEAK, count_this_thread};
 use common::shapes::grid;
 use glam::Vec3;
 use plumage::{Config, MeshInput, Mode, System};
-use std::alloc::{GlobalAlloc, Layout, System as Heap};
-use std::sync::atomic::{AtomicIsize, Ordering};
+use std::sync::atomic::Ordering;
 
-struct Counting;
-
-static LIVE: AtomicIsize = AtomicIsize::new(0);
-static PEAK: AtomicIsize = AtomicIsize::new(0);
-
-thread_local! {
-    /// Whether this thread's allocations are counted: only the thread that
-    /// steps the system (`threads = 1` runs the library on it). The test
-    /// harness's own threads allocate too (its notice of a test running
-    /// over 60 s, at a moment that varies from run to run).
-    static COUNTED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
-}
-
-fn counted() -> bool {
-    COUNTED.try_with(|c| c.get()).unwrap_or(false)
-}
-
-fn grew(by: isize) {
-    if !counted() {
-        return;
-    }
-    let live = LIVE.fetch_add(by, Ordering::Relaxed) + by;
-    PEAK.fetch_max(live, Ordering::Relaxed);
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let p = unsafe { Heap.alloc(layout) };
-        if !p.is_null() {
-            grew(layout.size() as isize);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { Heap.dealloc(ptr, layout) };
-        if counted() {
-            LIVE.fetch_sub(layout.size() as isize, Ordering::Relaxed);
-        }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let p = unsafe { Heap.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            grew(new_size as isize - layout.size() as isize);
-        }
-        p
-    }
-}
-
+/// Only the thread that steps the system is counted (`threads = 1` runs
+/// the library on it): the test harness's own threads allocate too (its
+/// notice of a test running over 60 s, at a moment that varies from run to
+/// run).
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: Counting<true> = Counting;
 
 /// Frames of the loop: a sine wave along x, its phase advancing 0.05 a frame
 /// (126 frames: about 2π).
@@ -87,7 +43,7 @@ fn peaks_per_period(sys: &mut System, frames: &[Vec<f32>]) -> Vec<isize> {
 
 #[test]
 fn the_peak_live_heap_of_a_looping_animation_stops_rising() {
-    COUNTED.with(|c| c.set(true));
+    count_this_thread();
     let plate = grid(6.0, 6.0, 24, 24, 0.0, true);
     // Made before any measurement, so that the test itself allocates nothing
     // while the peaks are taken (`peaks` is allocated at its full size).

@@ -294,7 +294,7 @@ fn rebuilding_every_frame_reuses_the_buffers() {
     nb.rebuild(&poses[0], &reach, &params);
     nb.rebuild(&poses[1], &reach, &params);
     let pointers =
-        |nb: &Neighbourhoods| (nb.neighbours_csr().1.as_ptr(), nb.pairs().as_ptr(), nb.obstacle_csr().1.as_ptr());
+        |nb: &Neighbourhoods| (nb.neighbours_csr().1.as_ptr(), nb.pairs().as_ptr(), nb.obstacle_csr().items().as_ptr());
     let before = pointers(&nb);
     for frame in 0..6 {
         nb.rebuild(&poses[frame % 2], &reach, &params);

@@ -6,47 +6,17 @@
 mod common;
 
 use common::gltf_mesh::morph_clip;
-use common::shapes::Shape;
+use common::shapes::{Shape, uv_sphere};
 use plumage::snapshot::Writer;
 use plumage::stats::{FrameReport, OrderingReport};
 use plumage::{Config, ErrorKind, MeshInput, Mode, System};
 use proptest::prelude::*;
-use std::f32::consts::PI;
 use std::sync::{Mutex, OnceLock};
 
 /// Size of the blob header (magic, version, fingerprint, payload length)
 /// and trailer (checksum), as laid out by `plumage::snapshot`.
 const HEADER: usize = 28;
 const TRAILER: usize = 8;
-
-/// A closed, indexed UV sphere of radius 1.
-fn sphere(rings: usize, segments: usize) -> Shape {
-    let mut s = Shape::default();
-    s.positions.extend_from_slice(&[0.0, 0.0, 1.0]);
-    for r in 1..rings {
-        let th = PI * r as f32 / rings as f32;
-        for k in 0..segments {
-            let ph = 2.0 * PI * k as f32 / segments as f32;
-            s.positions.extend_from_slice(&[th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]);
-        }
-    }
-    s.positions.extend_from_slice(&[0.0, 0.0, -1.0]);
-    let ring = |r: usize, k: usize| (1 + (r - 1) * segments + k % segments) as u32;
-    let south = (s.positions.len() / 3 - 1) as u32;
-    for k in 0..segments {
-        s.indices.extend_from_slice(&[0, ring(1, k), ring(1, k + 1)]);
-    }
-    for r in 1..rings - 1 {
-        for k in 0..segments {
-            s.indices.extend_from_slice(&[ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)]);
-            s.indices.extend_from_slice(&[ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)]);
-        }
-    }
-    for k in 0..segments {
-        s.indices.extend_from_slice(&[ring(rings - 1, k), south, ring(rings - 1, k + 1)]);
-    }
-    s
-}
 
 /// Frame `k` of an animation that really reorders feathers: a bulge
 /// travelling around the body, a twist about z growing with height and
@@ -126,7 +96,7 @@ fn run(sys: &mut System, rest: &[f32], from: usize, to: usize) -> Vec<Observed> 
 /// resumes from the same blob identically too, and the blob of a loaded
 /// system is the blob it was loaded from, at every frame.
 fn resume_is_exact(mode: Mode, recompute: bool) {
-    let shape = sphere(16, 24);
+    let shape = uv_sphere(16, 24);
     let mut sys = create(&shape, &config(mode, recompute, 600, 2));
     let rest = &shape.positions;
     run(&mut sys, rest, 1, 4);
@@ -190,7 +160,7 @@ fn resume_is_exact_rebuild() {
 /// run-dependent. The blob size per feather is reported.
 #[test]
 fn identical_runs_save_identical_blobs() {
-    let shape = sphere(16, 24);
+    let shape = uv_sphere(16, 24);
     let blobs = |threads: usize| -> Vec<Vec<u8>> {
         let mut sys = create(&shape, &config(Mode::Incremental, true, 600, threads));
         let mut out = vec![sys.save_state()];
@@ -217,7 +187,7 @@ fn identical_runs_save_identical_blobs() {
 /// the frame count semantics (evaluate keeps it, load restores it).
 #[test]
 fn load_restores_the_frame_count() {
-    let shape = sphere(10, 14);
+    let shape = uv_sphere(10, 14);
     let mut sys = create(&shape, &config(Mode::Incremental, true, 120, 1));
     let blob0 = sys.save_state();
     run(&mut sys, &shape.positions, 1, 3);
@@ -232,7 +202,7 @@ fn load_restores_the_frame_count() {
 /// A small system at frame 2 with the blob of its frame 1 (so that a blob
 /// accepted by mistake would show), for the refusal tests.
 fn small() -> (Shape, Config, System, Vec<u8>) {
-    let shape = sphere(8, 12);
+    let shape = uv_sphere(8, 12);
     let cfg = config(Mode::Incremental, true, 60, 1);
     let mut sys = create(&shape, &cfg);
     run(&mut sys, &shape.positions, 1, 1);
@@ -290,7 +260,7 @@ fn foreign_blobs_are_refused() {
     let blob_of = |shape: &Shape, cfg: &Config| create(shape, cfg).save_state();
     let others = [
         ("another seed", blob_of(&shape, &Config { seed: 8, ..cfg.clone() })),
-        ("another mesh", blob_of(&sphere(9, 12), &cfg)),
+        ("another mesh", blob_of(&uv_sphere(9, 12), &cfg)),
         ("another mode", blob_of(&shape, &Config { mode: Mode::Legacy, ..cfg.clone() })),
         ("another γ", blob_of(&shape, &Config { gamma: 0.61, ..cfg.clone() })),
         ("fixed neighbourhoods", blob_of(&shape, &Config { recompute_neighbourhoods: false, ..cfg.clone() })),

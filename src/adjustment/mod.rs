@@ -25,6 +25,7 @@ mod height_field;
 mod levels;
 pub(crate) mod obstacle;
 mod pitch_roll;
+mod raster;
 mod settle;
 mod steps;
 mod sweep;

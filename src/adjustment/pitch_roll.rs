@@ -27,7 +27,7 @@
 //! The root socket (see `height_field`): nothing within the first 2.5 % of
 //! the shaft constrains the pitch; heights beyond it are judged at its end.
 
-use super::height_field::{ceil_i32, floor_i32, max_f, min_f};
+use super::raster::{ceil_i32, floor_i32, max_f, min_f};
 use super::{AdjustParams, AdjustSteps, HeightField};
 use crate::feather::FeatherPose;
 

@@ -6,9 +6,10 @@
 
 use super::checks::{BoxesOf, CheckHints, FeatherInPlace, exact_check};
 use super::drape::drape;
-use super::height_field::{JUDGE_FRACTION, LocalMap};
+use super::height_field::JUDGE_FRACTION;
 use super::obstacle::ObstacleBoxes;
 use super::pitch_roll::choose_pose;
+use super::raster::LocalMap;
 use super::{AdjustOutcome, AdjustParams, AdjustSteps, DrapeRoute, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::feather::{FeatherPose, FeatherShape, MAX_JOINTS};

@@ -461,7 +461,7 @@ mod tests {
         let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
         let mut nb = Neighbourhoods::new();
         nb.rebuild(&frames, &reach, &NeighbourParams::default());
-        let candidates = CsrView::from(nb.obstacle_csr());
+        let candidates = nb.obstacle_csr();
         let params = AdjustParams::default();
         // Two orders: by x, and by x with every other pair of neighbours swapped.
         let by_x: Vec<u32> = (0..n as u32).map(|i| (i % w as u32) * h as u32 + i / w as u32).collect();

@@ -17,8 +17,8 @@ use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
 use crate::surface::Surface;
 use glam::Vec3;
 
+mod blob;
 mod staleness;
-mod state;
 
 pub use staleness::{Oriented, Placement, Staleness, orientation};
 
@@ -173,7 +173,7 @@ impl Coat {
     /// The obstacle candidates of every feather (`Coat::neighbourhoods`):
     /// row i lists, sorted, the roots within reach of root i.
     pub fn obstacle_candidates(&self) -> CsrView<'_, u32> {
-        CsrView::from(self.neighbourhoods.obstacle_csr())
+        self.neighbourhoods.obstacle_csr()
     }
 
     /// Moves the coat to `positions` (welded) and re-poses every root.

@@ -5,7 +5,6 @@
 use super::phases::{self, Workspace};
 use crate::adjustment::{AdjustSteps, OrderedRun, Selection};
 use crate::coat::{Coat, Dressing};
-use crate::csr::CsrView;
 use crate::error::Result;
 use crate::feather::FeatherPose;
 use crate::progress::{Phase, Progress};
@@ -56,7 +55,7 @@ pub fn solve_beside<R: Send>(
         shapes: &dressing.shapes,
         order: coat.order.order(),
         rank: coat.order.ranks(),
-        candidates: CsrView::from(coat.neighbourhoods.obstacle_csr()),
+        candidates: coat.neighbourhoods.obstacle_csr(),
         body: &coat.body,
         params: &dressing.adjust_params,
         steps: AdjustSteps::Full,

@@ -135,7 +135,7 @@ fn repose(
         neighbourhood_seconds = phases::neighbourhoods_and_body(coat, dressing, progress)?;
     }
     let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
-    let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
+    let candidates = coat.neighbourhoods.obstacle_csr();
     step.contacts.update(posed, &dressing.adjust_params, candidates, coat.order.ranks(), progress);
     progress.check(Phase::Ordering, 0.3)?;
     Ok(neighbourhood_seconds)
@@ -253,7 +253,7 @@ fn readjust(
     } else {
         let first = first_pass(coat, dressing, rule, work, step, progress)?;
         let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
-        let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
+        let candidates = coat.neighbourhoods.obstacle_csr();
         let missed = step.contacts.missed(posed, candidates, coat.order.ranks(), &coat.readjusted);
         if missed > 0 {
             step.verified.clear();
@@ -279,7 +279,7 @@ fn first_pass(
     step: &mut StepWorkspace,
     progress: &Progress,
 ) -> Result<AdjustStats> {
-    let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
+    let candidates = coat.neighbourhoods.obstacle_csr();
     let pass = Pass::new(dressing, rule, &coat.frames, &coat.order, &coat.body);
     let rows = step.contacts.obstacle_rows(candidates, coat.order.ranks());
     let longest = (0..dressing.len()).map(|i| candidates.row(i).len()).max().unwrap_or(0);
@@ -313,7 +313,7 @@ fn missed_pass(
 ) -> Result<AdjustStats> {
     step.no_suspects.clear();
     step.no_suspects.resize(dressing.len(), false);
-    let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
+    let candidates = coat.neighbourhoods.obstacle_csr();
     let pass = Pass::new(dressing, rule, &coat.frames, &coat.order, &coat.body);
     let selection = pass.selection(step.contacts.missed_flags(), rule.verifies().then_some(&step.no_suspects[..]));
     let keep_going = |_| progress.check(Phase::Adjusting, 1.0).is_ok();

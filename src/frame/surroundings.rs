@@ -6,7 +6,6 @@
 use super::phases::StepWorkspace;
 use crate::animation::contact::{Footprint, Sphere};
 use crate::coat::{Coat, Dressing, Oriented, Placement, orientation};
-use crate::csr::CsrView;
 use crate::geometry::RootFrame;
 use crate::progress::{Phase, Progress};
 use crate::triangle_grid::Aabb;
@@ -67,7 +66,7 @@ pub(super) fn record_placements(coat: &mut Coat, dressing: &Dressing, step: &mut
         *s = Sphere::of(&frames[j], &shapes[j], poses[j]);
     });
     orientations_into(frames, &mut step.orientations);
-    let candidates = CsrView::from(coat.neighbourhoods.obstacle_csr());
+    let candidates = coat.neighbourhoods.obstacle_csr();
     let (nb, ranks, spheres) = (&coat.neighbourhoods, coat.order.ranks(), &step.spheres);
     let oriented = |j: usize| Oriented { frame: &frames[j], orientation: step.orientations[j] };
     for i in 0..n {

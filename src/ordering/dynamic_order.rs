@@ -7,7 +7,7 @@
 //! lists); inserting an edge with Pearce–Kelly and the cycle rule in
 //! `pearce_kelly`; suppressed pairs, their blocking paths and retries in
 //! `suppressed`; the first, static order in `static_order`; saving and
-//! reading the order in `order_state`.
+//! reading the order in `order_blob`.
 //!
 //! Internally an edge is read "prior → dependent": the prior root is
 //! adjusted first, so every edge must go forward in [`PriorityOrder::order`].

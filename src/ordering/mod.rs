@@ -12,7 +12,7 @@
 //!
 //! [`Neighbourhoods`] and [`PriorityOrder`] also save their state into a
 //! system's state blob and read it back, checked (`write_state` /
-//! `read_state`; the order's in `order_state`).
+//! `read_state`; the order's in `order_blob`).
 //!
 //! A frame loop (incremental mode) does, per frame:
 //! 1. re-pose the roots; if neighbourhoods are recomputed,
@@ -34,8 +34,8 @@ mod dynamic_order;
 mod kd_tree;
 pub(crate) use kd_tree::KdTree;
 mod neighbours;
+mod order_blob;
 mod order_graph;
-mod order_state;
 mod pearce_kelly;
 mod priority;
 mod static_order;

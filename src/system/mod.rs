@@ -20,7 +20,7 @@ use crate::workers::WorkerPool;
 use glam::Vec3;
 use std::collections::BTreeMap;
 
-mod state;
+mod blob;
 mod validate;
 
 /// A feathered surface: created at the rest pose, then stepped frame by frame.
@@ -55,6 +55,33 @@ pub struct System {
     on_playback: bool,
     #[cfg(feature = "test-hooks")]
     test_panic: std::sync::atomic::AtomicBool,
+}
+
+/// What the mesh's vertex maps give the dressing: which vertices are
+/// feathered (a spacing scale above 0), the roots' layers and their
+/// feather types.
+fn dress_from_vertex_maps(dressing: &mut Dressing, welded: &WeldedMesh, mesh: &MeshInput<'_>, fields: &Fields) {
+    if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
+        dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
+    }
+    // One layer everywhere orders nothing: kept as no layers at all.
+    if let Some(layer) = mesh.layer.map(|v| welded.weld_attribute(v, 1)).filter(|l| l.iter().any(|&v| v != l[0])) {
+        dressing.layers =
+            dressing.roots.iter().map(|r| crate::field::blend_at(&layer, &dressing.surface, r.point)).collect();
+    }
+    if let Some(map) = mesh.feather_types {
+        // Indices below 256 are exact as floats, so they weld as floats.
+        let per_vertex: Vec<f32> = map.per_vertex.iter().map(|&t| t as f32).collect();
+        let welded_types = welded.weld_attribute(&per_vertex, 1);
+        let triangles = dressing.surface.triangles();
+        let kinds: Vec<u8> = (dressing.roots.iter())
+            .map(|r| {
+                let corner = (0..3).max_by(|&a, &b| r.point.bary[a].total_cmp(&r.point.bary[b])).unwrap_or(0);
+                welded_types[triangles[r.point.face as usize][corner] as usize] as u8
+            })
+            .collect();
+        dressing.retype(map.types, &kinds);
+    }
 }
 
 impl System {
@@ -118,27 +145,7 @@ impl System {
         check_feather_arrays(config, planted.roots.len())?;
         progress.check(Phase::Sampling, 1.0)?;
         let mut dressing = Dressing::new(surface, &welded, std::mem::take(&mut planted.roots), config);
-        if fields.vertex_spacing_scales().iter().any(|&s| s <= 0.0) {
-            dressing.feathered = fields.vertex_spacing_scales().iter().map(|&s| s > 0.0).collect();
-        }
-        // One layer everywhere orders nothing: kept as no layers at all.
-        if let Some(layer) = attribute(mesh.layer, 1).filter(|l| l.iter().any(|&v| v != l[0])) {
-            dressing.layers =
-                dressing.roots.iter().map(|r| crate::field::blend_at(&layer, &dressing.surface, r.point)).collect();
-        }
-        if let Some(map) = mesh.feather_types {
-            // Indices below 256 are exact as floats, so they weld as floats.
-            let per_vertex: Vec<f32> = map.per_vertex.iter().map(|&t| t as f32).collect();
-            let welded_types = welded.weld_attribute(&per_vertex, 1);
-            let triangles = dressing.surface.triangles();
-            let kinds: Vec<u8> = (dressing.roots.iter())
-                .map(|r| {
-                    let corner = (0..3).max_by(|&a, &b| r.point.bary[a].total_cmp(&r.point.bary[b])).unwrap_or(0);
-                    welded_types[triangles[r.point.face as usize][corner] as usize] as u8
-                })
-                .collect();
-            dressing.retype(map.types, &kinds);
-        }
+        dress_from_vertex_maps(&mut dressing, &welded, mesh, &fields);
         // The metrics are measured below, beside the static adjustment.
         let sampling_report = SamplingReport {
             roots: dressing.len(),
@@ -149,28 +156,7 @@ impl System {
             seconds: planted.seconds,
             field_singularities: singular_faces_on_feathers(&welded, &fields),
         };
-        let mut system = Self {
-            pool,
-            mesh: welded,
-            dressing,
-            sampling: sampling_report,
-            coat: Coat::default(),
-            records: Vec::new(),
-            triangles: Vec::new(),
-            work: Workspace::default(),
-            step_work: StepWorkspace::default(),
-            frame_positions: Vec::new(),
-            previous_poses: Vec::new(),
-            pose_changes: PoseChanges::default(),
-            previous_frames: Vec::new(),
-            changed: Vec::new(),
-            reposed: 0,
-            all_changed: true,
-            checkpoints: BTreeMap::new(),
-            on_playback: true,
-            #[cfg(feature = "test-hooks")]
-            test_panic: Default::default(),
-        };
+        let mut system = Self::fresh(pool, welded, dressing, sampling_report);
         let rest = system.mesh.positions.clone();
         let Self { pool, dressing, coat, work, sampling, .. } = &mut system;
         let dressing = &*dressing;
@@ -197,6 +183,32 @@ impl System {
             }
         }
         Ok(system)
+    }
+
+    /// A system over `mesh` and `dressing` before its first adjustment.
+    fn fresh(pool: WorkerPool, mesh: WeldedMesh, dressing: Dressing, sampling: SamplingReport) -> Self {
+        Self {
+            pool,
+            mesh,
+            dressing,
+            sampling,
+            coat: Coat::default(),
+            records: Vec::new(),
+            triangles: Vec::new(),
+            work: Workspace::default(),
+            step_work: StepWorkspace::default(),
+            frame_positions: Vec::new(),
+            previous_poses: Vec::new(),
+            pose_changes: PoseChanges::default(),
+            previous_frames: Vec::new(),
+            changed: Vec::new(),
+            reposed: 0,
+            all_changed: true,
+            checkpoints: BTreeMap::new(),
+            on_playback: true,
+            #[cfg(feature = "test-hooks")]
+            test_panic: Default::default(),
+        }
     }
 
     /// Test builds only: the next step, evaluate or validate panics.

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod character;
+pub mod counting;
 pub mod fuzz;
 pub mod gltf_mesh;
 pub mod shapes;

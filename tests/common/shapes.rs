@@ -49,6 +49,36 @@ pub fn grid(w: f32, h: f32, nx: usize, ny: usize, z: f32, up: bool) -> Shape {
     s
 }
 
+/// A closed UV sphere of radius 1 round the origin, poles on ±z (the
+/// south pole first), `rings` bands of `sides` quads (triangles at the
+/// poles), normals outward; with an even `rings`, one ring of vertices lies
+/// exactly on the equator (z = 0).
+pub fn uv_sphere(rings: usize, sides: usize) -> Shape {
+    assert!(rings >= 2 && sides >= 3);
+    let mut s = Shape::default();
+    s.positions.extend_from_slice(&[0.0, 0.0, -1.0]);
+    for r in 1..rings {
+        let polar = std::f32::consts::PI * r as f32 / rings as f32;
+        let z = if 2 * r == rings { 0.0 } else { -polar.cos() };
+        for k in 0..sides {
+            let a = std::f32::consts::TAU * k as f32 / sides as f32;
+            s.positions.extend_from_slice(&[polar.sin() * a.cos(), polar.sin() * a.sin(), z]);
+        }
+    }
+    s.positions.extend_from_slice(&[0.0, 0.0, 1.0]);
+    let top = (s.positions.len() / 3 - 1) as u32;
+    let ring = |r: usize, k: usize| (1 + (r - 1) * sides + k % sides) as u32;
+    for k in 0..sides {
+        s.indices.extend_from_slice(&[0, ring(1, k + 1), ring(1, k)]);
+        for r in 1..rings - 1 {
+            let (a, b, c, d) = (ring(r, k), ring(r, k + 1), ring(r + 1, k + 1), ring(r + 1, k));
+            s.indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+        s.indices.extend_from_slice(&[top, ring(rings - 1, k), ring(rings - 1, k + 1)]);
+    }
+    s
+}
+
 /// An open cylinder (prism) of `sides` sides and `rings` rows of quads
 /// around the z axis, from z = 0 to `height`, normals outward.
 pub fn cylinder(radius: f32, height: f32, sides: usize, rings: usize) -> Shape {

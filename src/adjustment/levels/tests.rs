@@ -210,8 +210,7 @@ fn a_sparse_run_matches_the_levels() {
     let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
     let mut nb = Neighbourhoods::new();
     nb.rebuild(&frames, &reach, &NeighbourParams::default());
-    let (offsets, indices) = nb.obstacle_csr();
-    let candidates = CsrView::new(offsets, indices);
+    let candidates = nb.obstacle_csr();
     let (order, rank) = tips_first(&frames);
     let body = BodyIndex::from_mesh(
         &[

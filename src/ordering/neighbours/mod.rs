@@ -27,18 +27,18 @@
 //! reaching round the rim of a wing can meet one from the other skin, and
 //! the adjustment checks those exactly.
 
+mod blob;
 mod params;
 mod rows;
-mod state;
 crate::memory::heap_size_of_fields!(Neighbourhoods {
-    tree, knn_offsets, knn_indices, pairs, obstacle_offsets, obstacle_indices, bucket_offsets, bucket_items,
-    fill_cursor, leaf_ids, leaf_starts, points, cells, nodes, chunks, #[cfg(test)] scratch_indices
+    tree, knn_offsets, knn_indices, pairs, obstacles, pair_buckets, leaf_ids, leaf_starts, points, cells, nodes, chunks, #[cfg(test)] scratch_indices
 } plain { layout_generation, layout_roots, layout_spread, tree_current });
 
 #[cfg(test)]
 mod tests;
 
 use super::kd_tree::KdTree;
+use crate::csr::{Csr, CsrView};
 use crate::geometry::RootFrame;
 pub use params::NeighbourParams;
 use params::{row, sanitized_reach};
@@ -59,11 +59,11 @@ pub struct Neighbourhoods {
     knn_offsets: Vec<u32>,
     knn_indices: Vec<u32>,
     pairs: Vec<(u32, u32)>,
-    obstacle_offsets: Vec<u32>,
-    obstacle_indices: Vec<u32>,
-    bucket_offsets: Vec<u32>,
-    bucket_items: Vec<u32>,
-    fill_cursor: Vec<u32>,
+    /// Obstacle candidates, row i sorted by index.
+    obstacles: Csr<u32>,
+    /// Scratch of [`rebuild_pairs`](Self::rebuild_pairs): the larger ends
+    /// of the pairs, by smaller end.
+    pair_buckets: Csr<u32>,
     /// The leaf layout: root ids in tree order and where each leaf starts.
     /// Kept from frame to frame while the leaves stay compact (see
     /// [`LAYOUT_SLACK`]); the rows do not depend on it.
@@ -92,8 +92,7 @@ impl Clone for Neighbourhoods {
             knn_offsets: self.knn_offsets.clone(),
             knn_indices: self.knn_indices.clone(),
             pairs: self.pairs.clone(),
-            obstacle_offsets: self.obstacle_offsets.clone(),
-            obstacle_indices: self.obstacle_indices.clone(),
+            obstacles: self.obstacles.clone(),
             ..Self::default()
         }
     }
@@ -200,45 +199,34 @@ impl Neighbourhoods {
     /// `|r_i − r_j| ≤ reach_i + reach_j`, sorted by index. The relation is
     /// symmetric; the adjustment keeps those earlier in the order.
     pub fn obstacle_candidates_of(&self, i: u32) -> &[u32] {
-        row(&self.obstacle_offsets, &self.obstacle_indices, i)
+        self.obstacles.row(i as usize)
     }
 
-    /// The obstacle candidates as CSR (same layout as [`neighbours_csr`](Self::neighbours_csr)).
-    pub fn obstacle_csr(&self) -> (&[u32], &[u32]) {
-        (&self.obstacle_offsets, &self.obstacle_indices)
+    /// The obstacle candidates, row i those of root i.
+    pub fn obstacle_csr(&self) -> CsrView<'_, u32> {
+        self.obstacles.view()
     }
 
     /// Symmetrises the neighbourhoods into sorted unique `(lo, hi)` pairs with
     /// a counting sort on `lo` followed by a small sort per bucket.
     fn rebuild_pairs(&mut self, n: usize) {
         let (offsets, indices) = (&self.knn_offsets, &self.knn_indices);
-        let buckets = &mut self.bucket_offsets;
-        buckets.clear();
-        buckets.resize(n + 1, 0);
+        let buckets = &mut self.pair_buckets;
+        buckets.begin(n);
         for i in 0..n as u32 {
             for &j in row(offsets, indices, i) {
-                buckets[i.min(j) as usize + 1] += 1;
+                buckets.count(i.min(j) as usize);
             }
         }
-        for i in 0..n {
-            buckets[i + 1] += buckets[i];
-        }
-        let cursor = &mut self.fill_cursor;
-        cursor.clear();
-        cursor.extend_from_slice(&buckets[..n]);
-        let items = &mut self.bucket_items;
-        items.clear();
-        items.resize(indices.len(), 0);
+        buckets.allocate();
         for i in 0..n as u32 {
             for &j in row(offsets, indices, i) {
-                let lo = i.min(j) as usize;
-                items[cursor[lo] as usize] = i.max(j);
-                cursor[lo] += 1;
+                buckets.place(i.min(j) as usize, i.max(j));
             }
         }
         self.pairs.clear();
         for lo in 0..n {
-            let bucket = &mut items[buckets[lo] as usize..buckets[lo + 1] as usize];
+            let bucket = buckets.row_mut(lo);
             bucket.sort_unstable();
             let mut last = None;
             for &hi in bucket.iter() {
@@ -340,29 +328,26 @@ impl Neighbourhoods {
         }
         // Gather the rows by root index.
         let chunks = &self.chunks[..chunks];
-        for (offsets, lens) in [(&mut self.obstacle_offsets, 0usize), (&mut self.knn_offsets, 1)] {
-            offsets.clear();
-            offsets.resize(n + 1, 0);
-            for chunk in chunks {
-                for (r, &i) in chunk.roots.iter().enumerate() {
-                    let len = if lens == 0 { chunk.row_lens[r] } else { chunk.knn_lens[r] };
-                    offsets[i as usize + 1] = len;
-                }
-            }
-            for i in 0..n {
-                offsets[i + 1] += offsets[i];
+        self.obstacles.begin(n);
+        self.knn_offsets.clear();
+        self.knn_offsets.resize(n + 1, 0);
+        for chunk in chunks {
+            for (r, &i) in chunk.roots.iter().enumerate() {
+                self.obstacles.count_many(i as usize, chunk.row_lens[r] as usize);
+                self.knn_offsets[i as usize + 1] = chunk.knn_lens[r];
             }
         }
-        self.obstacle_indices.clear();
-        self.obstacle_indices.resize(self.obstacle_offsets[n] as usize, 0);
+        for i in 0..n {
+            self.knn_offsets[i + 1] += self.knn_offsets[i];
+        }
+        self.obstacles.allocate();
         self.knn_indices.clear();
         self.knn_indices.resize(self.knn_offsets[n] as usize, 0);
         for chunk in chunks {
             let (mut at, mut knn_at) = (0usize, 0usize);
             for (r, &i) in chunk.roots.iter().enumerate() {
                 let (len, knn_len) = (chunk.row_lens[r] as usize, chunk.knn_lens[r] as usize);
-                let to = self.obstacle_offsets[i as usize] as usize;
-                self.obstacle_indices[to..to + len].copy_from_slice(&chunk.rows[at..at + len]);
+                self.obstacles.place_all(i as usize, &chunk.rows[at..at + len]);
                 let to = self.knn_offsets[i as usize] as usize;
                 self.knn_indices[to..to + knn_len].copy_from_slice(&chunk.knn[knn_at..knn_at + knn_len]);
                 at += len;

@@ -52,38 +52,10 @@ impl RowContext<'_> {
                 out.cache_generation = 0;
                 return;
             }
-            // The leaves within reach of leaf a (a included).
-            out.near.clear();
-            if !self.reach.is_empty() {
-                let cell = &self.cells[a];
-                out.stack.clear();
-                out.stack.push(0);
-                while let Some(x) = out.stack.pop() {
-                    let node = &self.nodes[x as usize];
-                    if !cell.may_reach(&node.cell) {
-                        continue;
-                    }
-                    if node.children == u32::MAX {
-                        out.near.push(node.leaf);
-                    } else {
-                        out.stack.push(node.children + 1);
-                        out.stack.push(node.children);
-                    }
-                }
-            }
-            // Their roots sorted by index, so that every row comes out sorted.
-            // (Sorted as packed (index, place in tree order) words: much
-            // cheaper than sorting the points themselves.)
+            self.near_leaves(a, &mut out.stack, &mut out.near);
             let leaf = &mut out.cached[local];
             if !reuse || leaf.near != out.near {
-                leaf.near.clear();
-                leaf.near.extend_from_slice(&out.near);
-                leaf.keys.clear();
-                for &b in &out.near {
-                    let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
-                    leaf.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
-                }
-                leaf.keys.sort_unstable();
+                self.sort_roots(&out.near, leaf);
             }
             out.union.fill(&leaf.keys, self.points);
             let mut guess = f32::INFINITY;
@@ -142,6 +114,46 @@ impl RowContext<'_> {
         }
         out.cache_generation = self.generation;
         out.cache_leaves = (leaves.start, leaves.end);
+    }
+}
+
+impl RowContext<'_> {
+    /// Into `near`, the leaves within reach of leaf `a` (`a` included; none
+    /// without reaches).
+    fn near_leaves(&self, a: usize, stack: &mut Vec<u32>, near: &mut Vec<u32>) {
+        near.clear();
+        if self.reach.is_empty() {
+            return;
+        }
+        let cell = &self.cells[a];
+        stack.clear();
+        stack.push(0);
+        while let Some(x) = stack.pop() {
+            let node = &self.nodes[x as usize];
+            if !cell.may_reach(&node.cell) {
+                continue;
+            }
+            if node.children == u32::MAX {
+                near.push(node.leaf);
+            } else {
+                stack.push(node.children + 1);
+                stack.push(node.children);
+            }
+        }
+    }
+
+    /// Makes `leaf` the leaves `near` with their roots sorted by index, so
+    /// that every row comes out sorted. (Sorted as packed (index, place in
+    /// tree order) words: much cheaper than sorting the points themselves.)
+    fn sort_roots(&self, near: &[u32], leaf: &mut CachedLeaf) {
+        leaf.near.clear();
+        leaf.near.extend_from_slice(near);
+        leaf.keys.clear();
+        for &b in near {
+            let roots = self.starts[b as usize] as usize..self.starts[b as usize + 1] as usize;
+            leaf.keys.extend(roots.map(|u| (u64::from(self.ids[u]) << 32) | u as u64));
+        }
+        leaf.keys.sort_unstable();
     }
 }
 

@@ -107,7 +107,7 @@ fn rows_and_nearest_match_the_exhaustive_search_on_a_fold_at_any_thread_count() 
                 assert_eq!(nb.obstacle_candidates_of(i as u32), &rows[i][..], "row {i}, pose {step}");
                 assert_eq!(nb.neighbours_of(i as u32), &knn[i][..], "nearest of {i}, pose {step}");
             }
-            seen.push((nb.obstacle_csr().0.to_vec(), nb.obstacle_csr().1.to_vec(), nb.pairs().to_vec()));
+            seen.push((nb.obstacle_csr().offsets().to_vec(), nb.obstacle_csr().items().to_vec(), nb.pairs().to_vec()));
         }
         assert!(seen.windows(2).all(|w| w[0] == w[1]), "pose {step} depends on the thread count");
     }
@@ -165,7 +165,7 @@ fn leaf_pairs_give_the_tree_queries_obstacles_bitwise() {
             assert_eq!(nb.neighbours_of(i as u32), &ids[..], "root {i} of {}", frames.len());
         }
         nb.rebuild(&frames, &[], &NeighbourParams::default());
-        assert!(nb.obstacle_csr().1.is_empty() && nb.obstacle_csr().0.len() == frames.len() + 1);
+        assert!(nb.obstacle_csr().is_empty() && nb.obstacle_csr().rows() == frames.len());
     }
 }
 
@@ -174,7 +174,7 @@ fn round_trip_restores_every_relation() {
     let (frames, reach) = patch();
     let mut nb = Neighbourhoods::new();
     nb.rebuild(&frames, &reach, &NeighbourParams::default());
-    assert!(nb.obstacle_csr().1.len() > 10 * frames.len(), "the patch must have many obstacles");
+    assert!(nb.obstacle_csr().len() > 10 * frames.len(), "the patch must have many obstacles");
     let blob = blob_of(|w| nb.write_state(w));
     let back = read(&blob, frames.len()).unwrap();
     assert_eq!(back.neighbours_csr(), nb.neighbours_csr());

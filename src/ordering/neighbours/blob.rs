@@ -20,8 +20,7 @@ impl Neighbourhoods {
     pub(super) fn obstacles_by_tree(&mut self, frames: &[RootFrame], reach: &[f32]) {
         let n = frames.len();
         self.tree.rebuild(frames.iter().map(|f| f.position));
-        self.obstacle_offsets.clear();
-        self.obstacle_offsets.push(0);
+        let mut offsets = vec![0u32];
         self.scratch_indices.clear();
         let max_reach = reach.iter().fold(0.0f32, |m, &r| m.max(sanitized_reach(r)));
         for (i, frame) in frames.iter().enumerate() {
@@ -36,19 +35,11 @@ impl Neighbourhoods {
                     }
                 });
             }
-            self.obstacle_offsets.push(self.scratch_indices.len() as u32);
+            offsets.push(self.scratch_indices.len() as u32);
         }
-        self.fill_cursor.clear();
-        self.fill_cursor.extend_from_slice(&self.obstacle_offsets[..n]);
-        self.obstacle_indices.clear();
-        self.obstacle_indices.resize(self.scratch_indices.len(), 0);
-        for i in 0..n as u32 {
-            for &j in row(&self.obstacle_offsets, &self.scratch_indices, i) {
-                let slot = &mut self.fill_cursor[j as usize];
-                self.obstacle_indices[*slot as usize] = i;
-                *slot += 1;
-            }
-        }
+        let scratch = &self.scratch_indices;
+        let entries = || (0..n as u32).flat_map(|i| row(&offsets, scratch, i).iter().map(move |&j| (j as usize, i)));
+        self.obstacles.rebuild(n, entries);
     }
 }
 
@@ -110,36 +101,11 @@ impl Neighbourhoods {
     /// Fills the obstacle rows from their part above the diagonal: row `i`
     /// is `{j < i : i ∈ upper_j}` (in increasing `j`) followed by `upper_i`.
     fn symmetric_obstacles_from_upper(&mut self, n: usize, offsets: &[u32], upper: &[u32]) {
-        self.obstacle_offsets.clear();
-        self.obstacle_offsets.resize(n + 1, 0);
-        for i in 0..n as u32 {
-            let stored = row(offsets, upper, i);
-            self.obstacle_offsets[i as usize + 1] += stored.len() as u32;
-            for &j in stored {
-                self.obstacle_offsets[j as usize + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            self.obstacle_offsets[i + 1] += self.obstacle_offsets[i];
-        }
-        self.fill_cursor.clear();
-        self.fill_cursor.extend_from_slice(&self.obstacle_offsets[..n]);
-        self.obstacle_indices.clear();
-        self.obstacle_indices.resize(2 * upper.len(), 0);
-        for i in 0..n as u32 {
-            for &j in row(offsets, upper, i) {
-                let slot = &mut self.fill_cursor[j as usize];
-                self.obstacle_indices[*slot as usize] = i;
-                *slot += 1;
-            }
-        }
-        for i in 0..n as u32 {
-            for &j in row(offsets, upper, i) {
-                let slot = &mut self.fill_cursor[i as usize];
-                self.obstacle_indices[*slot as usize] = j;
-                *slot += 1;
-            }
-        }
+        // Within row j: first the i < j that list j (in increasing i),
+        // then j's own upper row.
+        let lower = (0..n as u32).flat_map(|i| row(offsets, upper, i).iter().map(move |&j| (j as usize, i)));
+        let own = (0..n as u32).flat_map(|i| row(offsets, upper, i).iter().map(move |&j| (i as usize, j)));
+        self.obstacles.rebuild(n, || lower.clone().chain(own.clone()));
     }
 }
 

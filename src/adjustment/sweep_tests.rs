@@ -1,0 +1,130 @@
+//! Unit tests of `sweep.rs`.
+
+use super::super::checks::pose_is_clear;
+use super::super::{AdjustSteps, DrapeRoute, HeightField, adjust_feather};
+use super::*;
+use crate::body::BodyIndex;
+use crate::feather::{feather_triangles, tip_position};
+use crate::geometry::RootFrame;
+
+fn shape() -> FeatherShape {
+    FeatherShape::for_spacing(1.0).with_segments(4)
+}
+
+/// A surface from quads (corners counter-clockwise seen from +z).
+fn quads(quads: &[[Vec3; 4]]) -> BodyIndex {
+    let mut pos = Vec::new();
+    let mut tris = Vec::new();
+    for q in quads {
+        let b = pos.len() as u32;
+        pos.extend_from_slice(q);
+        tris.extend_from_slice(&[[b, b + 1, b + 2], [b, b + 2, b + 3]]);
+    }
+    BodyIndex::from_mesh(&pos, &tris)
+}
+
+fn flat(x0: f32, x1: f32, z: f32) -> [Vec3; 4] {
+    let w = 20.0;
+    [Vec3::new(x0, -w, z), Vec3::new(x1, -w, z), Vec3::new(x1, w, z), Vec3::new(x0, w, z)]
+}
+
+fn root_at(x: f32, z: f32) -> RootFrame {
+    RootFrame::from_normal_and_direction(Vec3::new(x, 0.0, z), Vec3::Z, Vec3::X).unwrap()
+}
+
+/// Adjusts a bent feather at `frame` and checks that the swept drape
+/// placed it, clear by the exact checks; returns its tip.
+fn drape_at(frame: &RootFrame, obstacles: &[ObstacleFeather], body: &BodyIndex) -> Vec3 {
+    let (shape, params) = (shape(), AdjustParams::default());
+    let mut field = HeightField::new(params.height_field_u, params.height_field_v);
+    let out =
+        adjust_feather(frame, &shape, FeatherPose::default(), obstacles, body, &params, AdjustSteps::Full, &mut field);
+    assert_eq!(out.drape, DrapeRoute::Swept, "the swept drape places it: {:?}", out.pose);
+    assert!(pose_is_clear(frame, &shape, out.pose, obstacles, body, &mut field), "{:?}", out.pose);
+    tip_position(frame, &shape, out.pose)
+}
+
+#[test]
+fn over_a_step_the_tip_lies_on_the_upper_level() {
+    // The skin steps up by three thicknesses halfway along the feather:
+    // a kite must clear the step's edge and stands off the upper level;
+    // the bent feather climbs it and lies down on it.
+    let s = shape();
+    let (edge, rise) = (0.5 * s.length, 3.0 * s.thickness);
+    let body = quads(&[
+        flat(-10.0, edge, 0.0),
+        [
+            Vec3::new(edge, -20.0, 0.0),
+            Vec3::new(edge, -20.0, rise),
+            Vec3::new(edge, 20.0, rise),
+            Vec3::new(edge, 20.0, 0.0),
+        ],
+        flat(edge, 10.0, rise),
+    ]);
+    let tip = drape_at(&root_at(0.0, 0.0), &[], &body);
+    let height = tip.z - rise;
+    println!("step: tip {:.2} thicknesses above the upper level", height / s.thickness);
+    assert!(height < 3.0 * s.thickness, "tip {:.4} thicknesses above the upper level", height / s.thickness);
+}
+
+#[test]
+fn over_a_cylinder_the_tip_follows_the_skin() {
+    // Root on top of a cylinder of radius 1.2 lengths, the feather
+    // running around it: the skin falls 0.4 lengths below the tangent
+    // plane at the tip, more than the lowest pitch lets a kite follow.
+    let s = shape();
+    let r = 1.2 * s.length;
+    let n = 256;
+    let mut pos = Vec::new();
+    for a in 0..n {
+        let t = a as f32 / n as f32 * std::f32::consts::TAU;
+        for y in [-3.0f32, 3.0] {
+            pos.push(Vec3::new(r * t.sin(), y, r * t.cos() - r));
+        }
+    }
+    let mut tris = Vec::new();
+    for a in 0..n as u32 {
+        let (i, j) = (2 * a, 2 * ((a + 1) % n as u32));
+        tris.extend_from_slice(&[[i, j, j + 1], [i, j + 1, i + 1]]);
+    }
+    let body = BodyIndex::from_mesh(&pos, &tris);
+    let tip = drape_at(&root_at(0.0, 0.0), &[], &body);
+    let height = (tip - Vec3::new(0.0, tip.y, -r)).length() - r;
+    println!("cylinder: tip {:.2} thicknesses off the skin", height / s.thickness);
+    assert!(height < 3.0 * s.thickness, "tip {:.4} thicknesses off the skin", height / s.thickness);
+}
+
+#[test]
+fn on_a_stack_of_feathers_the_tip_lies_on_the_top_one() {
+    // Three feathers ahead of the root, each lying on the one after it
+    // (a row of a coat): the tip lies on the nearest of them, which is
+    // the top of the stack there.
+    let s = shape();
+    let body = quads(&[flat(-10.0, 10.0, 0.0)]);
+    let mut obstacles = Vec::new();
+    for k in (1..=3).rev() {
+        let frame = root_at(k as f32 * 0.25 * s.length, 0.0);
+        let placed = adjust_feather(
+            &frame,
+            &s,
+            FeatherPose::default(),
+            &obstacles,
+            &body,
+            &AdjustParams::default(),
+            AdjustSteps::Full,
+            &mut HeightField::new(32, 16),
+        );
+        obstacles.push(ObstacleFeather {
+            triangles: feather_triangles(&frame, &s, placed.pose),
+            thickness: s.thickness,
+            far_side: false,
+        });
+    }
+    let tip = drape_at(&root_at(0.0, 0.0), &obstacles, &body);
+    // The stack beneath the tip: the feathers rooted behind it, one
+    // thickness each.
+    let beneath = obstacles.len() as f32;
+    let height = tip.z - beneath * s.thickness;
+    println!("stack: tip {:.2} thicknesses above the stack", height / s.thickness);
+    assert!(height < 3.0 * s.thickness, "tip {:.4} thicknesses above the stack", height / s.thickness);
+}
