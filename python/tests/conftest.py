@@ -62,8 +62,8 @@ def run_host(host: str, *args: str) -> subprocess.CompletedProcess:
     return run
 
 
-def glb_mesh_frames(path: Path, node_name: str) -> Tuple[np.ndarray, np.ndarray, list]:
-    """(base positions, indices, [positions of each morph target applied alone]) of a node of the host's .glb."""
+def glb_node_arrays(path: Path, node_name: str) -> Tuple[np.ndarray, np.ndarray, list]:
+    """(positions, triangles as stored, [raw POSITION of each morph target]) of a node of the host's .glb."""
     pygltflib = pytest.importorskip("pygltflib")
     gltf = pygltflib.GLTF2().load(str(path))
     blob = gltf.binary_blob()
@@ -78,7 +78,10 @@ def glb_mesh_frames(path: Path, node_name: str) -> Tuple[np.ndarray, np.ndarray,
 
     node = next(n for n in gltf.nodes if n.name == node_name)
     prim = gltf.meshes[node.mesh].primitives[0]
-    base = read(prim.attributes.POSITION)
-    indices = read(prim.indices).reshape(-1, 3).astype(np.uint32)
-    frames = [base + read(t["POSITION"]) for t in prim.targets or []]
-    return base, indices, frames
+    return read(prim.attributes.POSITION), read(prim.indices).reshape(-1, 3), [read(t["POSITION"]) for t in prim.targets or []]
+
+
+def glb_mesh_frames(path: Path, node_name: str) -> Tuple[np.ndarray, np.ndarray, list]:
+    """(base positions, indices, [positions of each morph target applied alone]) of a node of the host's .glb."""
+    base, indices, targets = glb_node_arrays(path, node_name)
+    return base, indices.astype(np.uint32), [base + t for t in targets]

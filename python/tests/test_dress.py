@@ -16,14 +16,14 @@ import json
 import subprocess
 import sys
 from pathlib import Path
-from typing import Dict, List, Tuple
+from typing import Dict, List
 
 import numpy as np
 import pytest
 
 from plumage.poses import read_poses
 
-from conftest import REPO, run_host, uv_sphere
+from conftest import REPO, glb_node_arrays, run_host, uv_sphere
 
 pytest.importorskip("pygltflib", reason="pygltflib is not installed")
 from plumage import gltf  # noqa: E402
@@ -38,26 +38,6 @@ def shared_model(name: str) -> Path:
     if not path.is_file():
         pytest.skip(f"{path} is absent (the shared models live at ../shared/data from the repository root)")
     return path
-
-
-def glb_mesh(path: Path, node_name: str) -> Tuple[np.ndarray, np.ndarray, List[np.ndarray]]:
-    """(rest positions, triangles, [raw POSITION morph target k]) of a node of the host's .glb."""
-    import pygltflib
-
-    g = pygltflib.GLTF2().load(str(path))
-    blob = g.binary_blob()
-
-    def read(index: int) -> np.ndarray:
-        acc = g.accessors[index]
-        view = g.bufferViews[acc.bufferView]
-        dtype = {5126: np.float32, 5125: np.uint32, 5123: np.uint16}[acc.componentType]
-        width = {"SCALAR": 1, "VEC3": 3}[acc.type]
-        start = (view.byteOffset or 0) + (acc.byteOffset or 0)
-        return np.frombuffer(blob, dtype=dtype, count=acc.count * width, offset=start).reshape(acc.count, width)
-
-    node = next(n for n in g.nodes if n.name == node_name)
-    prim = g.meshes[node.mesh].primitives[0]
-    return read(prim.attributes.POSITION), read(prim.indices).reshape(-1, 3), [read(t["POSITION"]) for t in prim.targets or []]
 
 
 def host_poses(host: str, tmp: Path, *args: str, glb: bool = True):
@@ -85,7 +65,7 @@ def test_rest_and_frames_are_the_hosts(host, tmp_path, name) -> None:
     scene = gltf.Scene(model)
     assert_reader_is_host(scene, poses, fps=24, start=0.1)
     # the same bytes as the host's .glb: its rest pose, and each frame as its morph target (frame - rest)
-    base, indices, targets = glb_mesh(tmp_path / "run.glb", "body")
+    base, indices, targets = glb_node_arrays(tmp_path / "run.glb", "body")
     assert base.tobytes() == scene.rest_positions.tobytes()
     assert np.array_equal(indices, scene.triangles)
     assert len(targets) == 12
@@ -179,7 +159,7 @@ def test_usd_feathers_are_the_hosts_glb(host, tmp_path, name, preset) -> None:
     for k, code in enumerate(codes):
         assert np.array(body.GetPointsAttr().Get(code), np.float32).tobytes() == poses.frames[k].tobytes(), f"body, frame {k}"
 
-    f_base, f_idx, f_targets = glb_mesh(tmp_path / "host.glb", "feathers")
+    f_base, f_idx, f_targets = glb_node_arrays(tmp_path / "host.glb", "feathers")
     usd_idx = np.array(feathers.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3)
     assert usd_idx.shape == f_idx.shape and len(f_targets) == 3
     rest = np.array(feathers.GetPointsAttr().Get(), np.float32)

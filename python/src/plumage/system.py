@@ -60,7 +60,8 @@ def _float_array(value: ArrayLike, name: str, columns: int) -> FloatArray:
         return np.ascontiguousarray(arr, dtype=np.float32)
 
 
-def _index_array(value: ArrayLike, name: str) -> UIntArray:
+def _integers(value: ArrayLike, name: str, what: str) -> np.ndarray:
+    """`value` as a numpy integer array (an empty one as int64), else INVALID_ARGUMENT naming `what` was expected."""
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError) as e:
@@ -68,7 +69,12 @@ def _index_array(value: ArrayLike, name: str) -> UIntArray:
     if arr.size == 0:
         arr = arr.astype(np.int64)
     if arr.dtype.kind not in "iu":
-        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: expected integer indices, got dtype {arr.dtype}")
+        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: expected {what}, got dtype {arr.dtype}")
+    return arr
+
+
+def _index_array(value: ArrayLike, name: str) -> UIntArray:
+    arr = _integers(value, name, "integer indices")
     if arr.ndim == 1 and arr.size % 3 == 0:
         arr = arr.reshape(-1, 3)
     if arr.ndim != 2 or arr.shape[1] != 3:
@@ -81,14 +87,7 @@ def _index_array(value: ArrayLike, name: str) -> UIntArray:
 
 def _integer_array(value: ArrayLike, name: str, low: int, high: int) -> np.ndarray:
     """An integer array with every value in [low, high] (else INDEX_OUT_OF_RANGE)."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError) as e:
-        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: not an integer array ({e})") from None
-    if arr.size == 0:
-        arr = arr.astype(np.int64)
-    if arr.dtype.kind not in "iu":
-        raise PlumageError(_ffi.STATUS_INVALID_ARGUMENT, f"{name}: expected integers, got dtype {arr.dtype}")
+    arr = _integers(value, name, "integers")
     if arr.size and (int(arr.min()) < low or int(arr.max()) > high):
         bad = int(arr.min()) if int(arr.min()) < low else int(arr.max())
         raise PlumageError(_ffi.STATUS_INDEX_OUT_OF_RANGE, f"{name}: {bad} is out of range [{low}, {high}]")
