@@ -885,6 +885,12 @@ typedef struct PlumageFrameStats {
    * exact checks (appended).
    */
   uint64_t drape_descents;
+  /**
+   * Re-adjusted segmented feathers kept where they lay rather than
+   * draped afresh (appended; incremental steps): lifted in place as
+   * little as clears them, lowered a step, or left resting.
+   */
+  uint64_t kept_in_place;
 } PlumageFrameStats;
 
 /**

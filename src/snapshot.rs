@@ -10,9 +10,10 @@ const MAGIC: &[u8; 8] = b"PLUMAGE\x01";
 /// Version of the payload layout; bump on any change. 4: the staleness
 /// keeps each feather's recorded placements (net motion). 5: the frame
 /// figures hold the neighbourhood time and the level count. 6: no timings
-/// (the blob is byte-reproducible). 7: the settling flags. Blobs of
-/// another version are refused.
-pub(crate) const FORMAT_VERSION: u32 = 8;
+/// (the blob is byte-reproducible). 7: the settling flags. 9: the frame
+/// figures hold the feathers kept in place. Blobs of another version are
+/// refused.
+pub(crate) const FORMAT_VERSION: u32 = 9;
 const HEADER_LEN: usize = 8 + 4 + 8 + 8;
 const TRAILER_LEN: usize = 8;
 

@@ -75,6 +75,10 @@ pub struct FrameReport {
     /// Of those, the ones the swept drape left to the descent by exact
     /// checks (it found no room, or its pose failed the exact check).
     pub drape_descents: usize,
+    /// Re-adjusted segmented feathers kept where they lay rather than
+    /// draped afresh (incremental steps): lifted in place as little as
+    /// clears them, or lowered a step, or left resting.
+    pub kept_in_place: usize,
     /// Seconds spent re-posing roots and reordering.
     pub reorder_seconds: f64,
     /// Seconds spent in the height-field adjustment.

@@ -44,6 +44,7 @@ void put_adjustment(json& j, const PlumageFrameStats& s) {
         j["draped"] = s.draped;
         j["drape_descents"] = s.drape_descents;
     }
+    if (PLUMAGE_FILLED(s, kept_in_place)) j["kept_in_place"] = s.kept_in_place;
     if (PLUMAGE_FILLED(s, levels)) j["levels"] = s.levels;
     if (PLUMAGE_FILLED(s, neighbourhood_seconds)) put(j, "neighbourhood_seconds", s.neighbourhood_seconds);
 }

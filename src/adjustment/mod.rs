@@ -176,4 +176,10 @@ pub enum DrapeRoute {
     /// The descent by exact checks, where the swept drape found no room or
     /// its pose failed the check.
     Descent,
+    /// Not solved: the pose of the last frame, which failed its exact
+    /// check, repaired where it lay (incremental runs).
+    Repaired,
+    /// Not solved: the pose of the last frame, clear, lowered a step or
+    /// kept (incremental runs).
+    Lowered,
 }

@@ -111,3 +111,61 @@ pub(super) fn settled_pose(
         .or_else(|| large.clone().find(|&pose| clear(pose, field)))
         .unwrap_or(solved)
 }
+
+/// The lowest pose a bent feather may take (its pitch and every bend at
+/// their lowest), toward which [`lowered_pose`] steps.
+pub(super) fn lowest_pose(shape: &FeatherShape, params: &AdjustParams, current: FeatherPose) -> FeatherPose {
+    let mut lowest = current;
+    lowest.pitch = params.min_pitch;
+    let (bend_low, _) = params.bend_range();
+    let joints = shape.segment_count().saturating_sub(1);
+    lowest.bends.iter_mut().take(joints).for_each(|b| *b = bend_low);
+    lowest
+}
+
+/// A lowering step of [`lowered_pose`] is taken only where this many
+/// steps are clear: the feather keeps a step's room beneath it, so that
+/// the next small motion does not make it meet what it came down onto
+/// and be lifted again (lowering to the last clear step doubled the
+/// animated default coat's pops; BENCHMARKS.md, "Issue #30, session
+/// 15").
+const LOWERING_ROOM: f32 = 2.0;
+
+/// A bent feather lying clear at `current` whose surroundings drifted
+/// (incremental runs): `current` lowered by one step, the first of the
+/// whole feather turned down by the settle rate (its pitch), by half of
+/// it, or its joints alone bent down by the rate shared among them, that
+/// is clear with room to spare ([`LOWERING_ROOM`]). Each step turns the
+/// root-to-tip direction by at most the rate, so a feather that sinks a
+/// little a frame does not pop. `None` when none is clear: the feather
+/// rests on what lies beneath it.
+pub(super) fn lowered_pose(
+    feather: SettlingFeather<'_>,
+    current: FeatherPose,
+    boxes: BoxesOf<'_>,
+    field: &mut HeightField,
+) -> Option<FeatherPose> {
+    let SettlingFeather { frame, shape, params, body, rate } = feather;
+    let lowest = lowest_pose(shape, params, current);
+    let joints = shape.segment_count().saturating_sub(1);
+    let pitched = |share: f32| {
+        let mut pose = current;
+        pose.pitch = (current.pitch - share * rate).max(lowest.pitch.min(current.pitch));
+        pose
+    };
+    let bent = |share: f32| {
+        let mut pose = current;
+        let step = share * rate / joints.max(1) as f32;
+        for (b, low) in pose.bends.iter_mut().zip(lowest.bends).take(joints) {
+            *b = (*b - step).max(low.min(*b));
+        }
+        pose
+    };
+    let room = LOWERING_ROOM;
+    let mut clear = |pose: FeatherPose| pose == current || pose_is_clear_boxed(frame, shape, pose, boxes, body, field);
+    [(pitched(1.0), pitched(room)), (pitched(0.5), pitched(0.5 * room)), (bent(1.0), bent(room))]
+        .into_iter()
+        .filter(|(pose, _)| *pose != current)
+        .find(|&(pose, further)| clear(further) && (further == pose || clear(pose)))
+        .map(|(pose, _)| pose)
+}

@@ -55,6 +55,7 @@ impl Coat {
             clamped,
             draped,
             drape_descents,
+            kept_in_place,
             reorder_seconds: _,
             adjust_seconds: _,
             step_seconds: _,
@@ -66,7 +67,7 @@ impl Coat {
         w.u64(collision_tests);
         [priority_changes, reversals, reversals_refused, cycles_broken, clamped].iter().for_each(|&c| w.u64(c as u64));
         w.u64(levels as u64);
-        [draped, drape_descents].iter().for_each(|&c| w.u64(c as u64));
+        [draped, drape_descents, kept_in_place].iter().for_each(|&c| w.u64(c as u64));
         self.neighbourhoods.write_state(w);
         self.order.write_state(w);
         self.staleness.write_state(w);
@@ -125,6 +126,7 @@ impl Coat {
             levels: count(r)?,
             draped: count(r)?,
             drape_descents: count(r)?,
+            kept_in_place: count(r)?,
         };
         let neighbourhoods = Neighbourhoods::read_state(r, n)?;
         let order = PriorityOrder::read_state(r, n)?;

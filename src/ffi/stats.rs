@@ -128,6 +128,10 @@ pub struct PlumageFrameStats {
     /// Of those, the ones the swept drape left to the slower descent by
     /// exact checks (appended).
     pub drape_descents: u64,
+    /// Re-adjusted segmented feathers kept where they lay rather than
+    /// draped afresh (appended; incremental steps): lifted in place as
+    /// little as clears them, lowered a step, or left resting.
+    pub kept_in_place: u64,
 }
 
 /// The layout of `PlumageSamplingStats` before `field_singularities` was
@@ -144,7 +148,7 @@ const _: () = {
     use std::mem::size_of;
     assert!(size_of::<PlumageSamplingStats>() == 4 * 6 + 8 + 4 * 2);
     assert!(size_of::<PlumageOrderingStats>() == 4 * 6 + 8);
-    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 21);
+    assert!(size_of::<PlumageFrameStats>() == 4 + 4 + 8 * 22);
 };
 
 /// Sampling quality figures of the roots. PLUMAGE_STATUS_NOT_AVAILABLE when
@@ -250,6 +254,7 @@ pub unsafe extern "C" fn plumage_system_frame_stats(
                 largest_pose_change_deg: f64::from(system.pose_changes().largest).to_degrees(),
                 draped: r.draped as u64,
                 drape_descents: r.drape_descents as u64,
+                kept_in_place: r.kept_in_place as u64,
             })
         })
     }

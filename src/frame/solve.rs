@@ -86,6 +86,7 @@ pub fn solve_beside<R: Send>(
         cycles_broken: 0,
         clamped: stats.clamped,
         draped: stats.draped,
+        kept_in_place: stats.kept_in_place,
         drape_descents: stats.drape_descents,
         reorder_seconds: coat.ordering_report.seconds,
         adjust_seconds: stats.seconds,

@@ -44,6 +44,16 @@
 //! that may float a little higher (BENCHMARKS.md, "Measurements behind the
 //! code's constants"). `R_k` (at θs, by the same net motion) still selects
 //! the pairs whose priorities are recomputed.
+//!
+//! A full-size bent feather is kept where it lies rather than draped
+//! afresh (the adjustment's `kept_in_place`): one that fails its check is
+//! lifted in place as little as clears it, when a small lift does; a seed,
+//! or one whose obstacle sank, that is clear is lowered a step if there
+//! is room and otherwise left resting. A drape solved afresh lands
+//! elsewhere (its bends jump), pushes up what lies on it and costs a
+//! sweep; a step in place changes the pose by at most the settle rate
+//! and lets the coat sink onto what lies beneath it frame by frame. Kites
+//! and shortened feathers are solved as before.
 
 use super::phases::{self, StepWorkspace, Workspace};
 use super::rule::FrameRule;
@@ -97,6 +107,7 @@ pub fn step_coat(
         cycles_broken: reordering.cycles_broken,
         clamped: stats.clamped,
         draped: stats.draped,
+        kept_in_place: stats.kept_in_place,
         drape_descents: stats.drape_descents,
         reorder_seconds,
         adjust_seconds: stats.seconds,
@@ -332,8 +343,17 @@ fn missed_pass(
 /// descent counts are per pass, so a feather adjusted in both counts
 /// twice: each sum is capped by the count it is a part of.
 fn merge_passes(first: AdjustStats, second: AdjustStats, adjusted: &[bool], verified: &[bool]) -> AdjustStats {
-    let AdjustStats { adjusted: _, collision_tests, clamped, draped, drape_descents, verified: _, levels, seconds } =
-        first;
+    let AdjustStats {
+        adjusted: _,
+        collision_tests,
+        clamped,
+        draped,
+        drape_descents,
+        kept_in_place,
+        verified: _,
+        levels,
+        seconds,
+    } = first;
     let adjusted_count = adjusted.iter().filter(|a| **a).count();
     let draped = (draped + second.draped).min(adjusted_count);
     AdjustStats {
@@ -342,6 +362,7 @@ fn merge_passes(first: AdjustStats, second: AdjustStats, adjusted: &[bool], veri
         clamped: (clamped + second.clamped).min(adjusted_count),
         draped,
         drape_descents: (drape_descents + second.drape_descents).min(draped),
+        kept_in_place: (kept_in_place + second.kept_in_place).min(adjusted_count),
         verified: verified.iter().zip(adjusted).filter(|(v, a)| **v && !**a).count(),
         levels: levels + second.adjusted + second.verified,
         seconds: seconds + second.seconds,

@@ -212,6 +212,7 @@ class FrameStats(ctypes.Structure):
         ("largest_pose_change_deg", ctypes.c_double),
         ("draped", c_uint64),
         ("drape_descents", c_uint64),
+        ("kept_in_place", c_uint64),
     ]
 
 

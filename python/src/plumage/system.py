@@ -203,6 +203,7 @@ class FrameStats:
     largest_pose_change_deg: float
     draped: int
     drape_descents: int
+    kept_in_place: int
 
 
 @dataclass(frozen=True)

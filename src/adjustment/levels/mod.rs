@@ -76,6 +76,9 @@ pub struct AdjustStats {
     /// Of those, the ones the swept drape left to the descent by exact
     /// checks.
     pub drape_descents: usize,
+    /// Adjusted segmented feathers kept where they lay instead: repaired
+    /// in place or lowered a step (incremental runs).
+    pub kept_in_place: usize,
     /// Feathers checked exactly and left as they were
     /// ([`Selection::Verify`]).
     pub verified: usize,
@@ -360,7 +363,8 @@ impl Adjuster {
         stats.adjusted += 1;
         stats.collision_tests += u64::from(o.collision_tests);
         stats.clamped += usize::from(o.clamped);
-        stats.draped += usize::from(o.drape != DrapeRoute::Straight);
+        stats.draped += usize::from(matches!(o.drape, DrapeRoute::Swept | DrapeRoute::Descent));
+        stats.kept_in_place += usize::from(matches!(o.drape, DrapeRoute::Repaired | DrapeRoute::Lowered));
         stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
     }
 

@@ -3,13 +3,14 @@
 //! parallel run of one level.
 
 use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, pose_is_clear_boxed};
+use super::super::drape::repair_drape;
 use super::super::obstacle::ObstacleBoxes;
-use super::super::settle::{SettlingFeather, settled_pose};
+use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
 use super::super::steps::adjust_feather_boxed;
-use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, HeightField, ObstacleFeather};
+use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, DrapeRoute, HeightField, ObstacleFeather};
 use crate::body::BodyIndex;
 use crate::csr::CsrView;
-use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles};
+use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles, pose_change};
 use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
 use glam::Vec3;
@@ -239,8 +240,20 @@ pub(super) fn adjust_one(
     // The ids first: a check needs only them (and the prepared boxes);
     // the triangles are copied out only for a feather that is adjusted.
     collect_obstacle_ids(inputs, i, posed, worker);
-    if verify && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
-        return Visit::Verified;
+    // A bent feather of an incremental verifying run is kept where it lies,
+    // lowered, or repaired: solved afresh only when repair fails.
+    let local = kept_locally(inputs, i, poses[i]);
+    if (verify || local) && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
+        if verify {
+            return Visit::Verified;
+        }
+        return lowered(inputs, i, poses[i], posed, worker);
+    }
+    if (verify || local)
+        && let Some(pose) = repaired(inputs, i, poses[i], posed, worker)
+    {
+        let outcome = AdjustOutcome { pose, collision_tests: 0, clamped: false, drape: DrapeRoute::Repaired };
+        return Visit::Adjusted(outcome, pose);
     }
     worker.obstacles.clear();
     worker.obstacles.extend(worker.obstacle_ids.iter().map(|&j| {
@@ -269,6 +282,63 @@ pub(super) fn adjust_one(
     };
     let pose = settled_pose(feather, poses[i], solved.pose, boxes, &mut worker.field);
     Visit::Adjusted(AdjustOutcome { pose, ..solved }, solved.pose)
+}
+
+/// Whether feather `i`, to be adjusted in an incremental verifying run
+/// (a seed, or on an obstacle that sank), is kept where it lies rather
+/// than solved afresh: a full-size bent feather. A shortened one is solved
+/// (it may regrow), and so is every kite.
+fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
+    matches!(inputs.selection, Selection::Verify { .. })
+        && !inputs.pairs_only
+        && inputs.settle_rate > 0.0
+        && inputs.shapes[i].segment_count() > 1
+        && pose.scale >= 1.0
+}
+
+/// A bent feather lying clear whose surroundings drifted, lowered one
+/// step (see [`lowered_pose`]). It is marked adjusted either way (its
+/// surroundings are recorded afresh), and settles on (lowers again next
+/// frame) while a step was clear: its solved pose is then its lowest.
+fn lowered(inputs: &Inputs<'_>, i: usize, pose: FeatherPose, posed: PosedGeometry<'_>, worker: &mut Worker) -> Visit {
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let (frame, shape, params) = (&inputs.frames[i], &inputs.shapes[i], inputs.params);
+    let feather = SettlingFeather { frame, shape, params, body: inputs.body, rate: inputs.settle_rate };
+    let outcome = |pose| AdjustOutcome { pose, collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
+    match lowered_pose(feather, pose, boxes, &mut worker.field) {
+        Some(step) => Visit::Adjusted(outcome(step), lowest_pose(shape, params, step)),
+        None => Visit::Adjusted(outcome(pose), pose),
+    }
+}
+
+/// The largest change of any angle (radians, about 2.9°) a repair in
+/// place may make ([`repaired`]); a feather that must move more is solved
+/// afresh and settles toward that pose. Larger repairs lifted a joint and
+/// every one before it together, standing feathers up (more bristles on
+/// the Flamingo; BENCHMARKS.md, "Issue #30, session 15").
+const REPAIR_MOST: f32 = 0.05;
+
+/// A bent feather that failed its check where it lies, repaired there
+/// (incremental runs): its joints lifted as little as clears them (see
+/// [`repair_drape`]), within the pitch limit and by at most
+/// [`REPAIR_MOST`]. A repair changes the pose far less than a drape solved
+/// afresh and costs a few segment checks instead of a sweep; `None` (a
+/// kite, a run that solves at once, or no small repair clears) leaves the
+/// feather to be adjusted.
+fn repaired(
+    inputs: &Inputs<'_>,
+    i: usize,
+    pose: FeatherPose,
+    posed: PosedGeometry<'_>,
+    worker: &mut Worker,
+) -> Option<FeatherPose> {
+    if inputs.settle_rate <= 0.0 || inputs.shapes[i].segment_count() < 2 {
+        return None;
+    }
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
+    repair_drape(&at, pose, inputs.params, &mut worker.field)
+        .filter(|p| p.pitch <= inputs.params.max_pitch && pose_change(&pose, p) <= REPAIR_MOST)
 }
 
 /// Fills `worker.obstacle_ids` with feather `i`'s earlier candidates that
