@@ -302,3 +302,65 @@ fn a_sparse_run_matches_the_levels() {
     }
     assert!(checked > n, "too little was adjusted or checked: {checked}");
 }
+
+/// A bent feather of a verifying run is kept where it lies: once its
+/// obstacle sinks away it comes down a step of at most the settle rate a
+/// frame (never meeting the obstacle, exact test) and stops with room
+/// beneath it; once the obstacle rises a little into it, it is lifted in
+/// place by a small change rather than draped afresh. Neither is counted
+/// as a drape. A kite in the same scene is solved afresh instead.
+#[test]
+fn a_bent_feather_is_lowered_and_repaired_in_place() {
+    let scene = TwoFeathers::new(4, |_| 1.0);
+    let mut poses = vec![FeatherPose::default(); 2];
+    let mut adjuster = Adjuster::new();
+    scene.run(&mut adjuster, &mut poses, Selection::All, 0.0);
+    let rest = poses.clone();
+    let rate = 0.035;
+    let (seeds, none) = ([false, true], [false, false]);
+    let verify = |threshold| Selection::Verify { seeds: &seeds, suspects: &none, threshold };
+    // B stands raised (as if its obstacle had sunk away): it comes down a
+    // step a frame.
+    poses[1].pitch = rest[1].pitch + 0.3;
+    assert!(!scene.meet(&poses));
+    let mut steps = 0;
+    loop {
+        let before = poses[1];
+        scene.run(&mut adjuster, &mut poses, verify(0.3), rate);
+        assert!(adjuster.adjusted()[1], "a seed is visited");
+        assert!(!scene.meet(&poses), "B never meets A on the way down");
+        let change = crate::feather::pose_change(&before, &poses[1]);
+        assert!(change <= rate + 1e-6, "B moved by {change} in one frame");
+        if poses[1] == before {
+            break;
+        }
+        assert!(poses[1].pitch <= before.pitch, "B only comes down");
+        steps += 1;
+        assert!(steps < 100, "B never comes to rest");
+    }
+    assert!(steps >= 5, "B came down in {steps} steps");
+    // It has come well down from where it stood.
+    assert!(
+        poses[1].pitch < rest[1].pitch + 0.3 - 4.0 * rate,
+        "B came down from {} to {}",
+        rest[1].pitch + 0.3,
+        poses[1].pitch
+    );
+    // A rises a little into B: B is lifted in place, by a small change.
+    let lying = poses.clone();
+    poses[0].pitch += 0.04;
+    assert!(scene.meet(&poses), "the risen obstacle must reach B where it lies");
+    scene.run(&mut adjuster, &mut poses, verify(0.3), rate);
+    assert!(!scene.meet(&poses), "B is lifted clear of A");
+    let change = crate::feather::pose_change(&lying[1], &poses[1]);
+    assert!(change > 0.0 && change <= 0.05 + 1e-6, "B was lifted by {change}: not a repair in place");
+    // A kite seed is solved afresh and settles toward that pose.
+    let kites = TwoFeathers::new(1, |_| 1.0);
+    let mut kite_poses = vec![FeatherPose::default(); 2];
+    kites.run(&mut adjuster, &mut kite_poses, Selection::All, 0.0);
+    let solved = kite_poses[1];
+    kite_poses[1].pitch += 0.3;
+    kites.run(&mut adjuster, &mut kite_poses, verify(0.3), rate);
+    assert!((kite_poses[1].pitch - (solved.pitch + 0.3 - rate)).abs() < 1e-5, "{:?}", kite_poses[1]);
+    assert!(adjuster.settling()[1], "the kite settles on toward its solved pose");
+}

@@ -243,11 +243,20 @@ pub(super) fn adjust_one(
     // A bent feather of an incremental verifying run is kept where it lies,
     // lowered, or repaired: solved afresh only when repair fails.
     let local = kept_locally(inputs, i, poses[i]);
+    // Lowered first: a clear step down stands whatever the pose it left.
+    if local
+        && !verify
+        && let Some(step) = lowered(inputs, i, poses[i], posed, worker)
+    {
+        return step;
+    }
     if (verify || local) && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
         if verify {
             return Visit::Verified;
         }
-        return lowered(inputs, i, poses[i], posed, worker);
+        // Resting: kept, its surroundings recorded afresh.
+        let outcome = AdjustOutcome { pose: poses[i], collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
+        return Visit::Adjusted(outcome, poses[i]);
     }
     if (verify || local)
         && let Some(pose) = repaired(inputs, i, poses[i], posed, worker)
@@ -296,19 +305,23 @@ fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
         && pose.scale >= 1.0
 }
 
-/// A bent feather lying clear whose surroundings drifted, lowered one
-/// step (see [`lowered_pose`]). It is marked adjusted either way (its
-/// surroundings are recorded afresh), and settles on (lowers again next
-/// frame) while a step was clear: its solved pose is then its lowest.
-fn lowered(inputs: &Inputs<'_>, i: usize, pose: FeatherPose, posed: PosedGeometry<'_>, worker: &mut Worker) -> Visit {
+/// A bent feather whose surroundings drifted, or whose obstacle sank,
+/// lowered one step (see [`lowered_pose`]); `None` when no step is clear.
+/// It settles on (lowers again next frame): its solved pose is its
+/// lowest, which also brings what lies on it to try a step down.
+fn lowered(
+    inputs: &Inputs<'_>,
+    i: usize,
+    pose: FeatherPose,
+    posed: PosedGeometry<'_>,
+    worker: &mut Worker,
+) -> Option<Visit> {
     let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
     let (frame, shape, params) = (&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let feather = SettlingFeather { frame, shape, params, body: inputs.body, rate: inputs.settle_rate };
-    let outcome = |pose| AdjustOutcome { pose, collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
-    match lowered_pose(feather, pose, boxes, &mut worker.field) {
-        Some(step) => Visit::Adjusted(outcome(step), lowest_pose(shape, params, step)),
-        None => Visit::Adjusted(outcome(pose), pose),
-    }
+    let step = lowered_pose(feather, pose, boxes, &mut worker.field)?;
+    let outcome = AdjustOutcome { pose: step, collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
+    Some(Visit::Adjusted(outcome, lowest_pose(shape, params, step)))
 }
 
 /// The largest change of any angle (radians, about 2.9°) a repair in
