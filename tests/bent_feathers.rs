@@ -72,3 +72,39 @@ fn a_bent_coat_saved_and_loaded_steps_to_the_same_bytes() {
     restored.step(&next).unwrap();
     assert_eq!(original.feather_triangles(), restored.feather_triangles());
 }
+
+/// While the body moves, the default bent coat keeps its feathers where
+/// they lie (lifted in place, or lowered a step onto what sank away)
+/// rather than draping them afresh, and stays collision-free in every
+/// frame. With the in-place path broken (every readjusted feather draped
+/// afresh, as before session 15) the drapes outnumber the rest. Back at
+/// the rest shape the coat stands higher than at rest (0.151 to 0.194 tip
+/// median, either way: the ratchet of BENCHMARKS.md, "Issue #30 (session
+/// 12)"); the bound below only catches a runaway.
+#[test]
+fn a_moving_bent_coat_is_kept_in_place_and_lies_no_higher() {
+    let shape = cylinder(1.0, 6.0, 48, 24);
+    let mesh = MeshInput::new(&shape.positions, &shape.indices);
+    let mut sys = System::new(&Config { target_feathers: 800, ..bent(2) }, &mesh).unwrap();
+    let rest = sys.validate().unwrap();
+    let (mut kept, mut draped) = (0, 0);
+    let frames = 16;
+    for k in 1..=frames {
+        // Back and forth twice, ending at the rest shape: every part of the
+        // coat both closes and opens.
+        let t = (k as f32 / frames as f32 * std::f32::consts::TAU * 2.0).sin();
+        sys.step(&wave(&shape.positions, t)).unwrap();
+        let v = sys.validate().unwrap();
+        assert_eq!((v.intersecting_pairs, v.body_penetrations), (0, 0), "frame {k}");
+        let r = sys.frame_report().unwrap();
+        kept += r.kept_in_place;
+        draped += r.draped;
+    }
+    let last = sys.validate().unwrap();
+    println!(
+        "kept in place {kept}, draped {draped}; tip median rest {:.3}, last {:.3}",
+        rest.tip_height_median, last.tip_height_median
+    );
+    assert!(kept > 2 * draped, "kept in place {kept}, draped afresh {draped}");
+    assert!(last.tip_height_median <= rest.tip_height_median + 0.08, "{rest:?} -> {last:?}");
+}
