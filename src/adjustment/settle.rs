@@ -162,7 +162,9 @@ pub(super) fn lowered_pose(
         pose
     };
     let room = LOWERING_ROOM;
-    let mut clear = |pose: FeatherPose| pose == current || pose_is_clear_boxed(frame, shape, pose, boxes, body, field);
+    let mut clear = |pose: FeatherPose| pose_is_clear_boxed(frame, shape, pose, boxes, body, field);
+    // Each step with the pose `room` times as far down; the farther first
+    // (a step that fails there is not taken, whatever the step itself).
     [(pitched(1.0), pitched(room)), (pitched(0.5), pitched(0.5 * room)), (bent(1.0), bent(room))]
         .into_iter()
         .filter(|(pose, _)| *pose != current)
