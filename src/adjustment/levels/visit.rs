@@ -334,12 +334,13 @@ fn lowered(
     Some(Visit::Adjusted(outcome, if whole { lowest_pose(shape, params, step) } else { step }))
 }
 
-/// The largest change of any angle (radians, about 2.9°) a repair in
+/// The largest change of any angle (radians, about 1.7°) a repair in
 /// place may make ([`repaired`]); a feather that must move more is solved
-/// afresh and settles toward that pose. Larger repairs lifted a joint and
-/// every one before it together, standing feathers up (more bristles on
-/// the Flamingo; BENCHMARKS.md, "Issue #30, session 15").
-const REPAIR_MOST: f32 = 0.05;
+/// afresh and settles toward that pose. Larger repairs lift a joint and
+/// every one before it together, standing feathers up (more bristles and
+/// pops on the Flamingo); smaller ones leave more to the drape, which
+/// costs more (BENCHMARKS.md, "Issue #30, session 15").
+pub(super) const REPAIR_MOST: f32 = 0.03;
 
 /// A bent feather that failed its check where it lies, repaired there
 /// (incremental runs): its joints lifted as little as clears them (see
