@@ -126,9 +126,8 @@ pub(super) fn lowest_pose(shape: &FeatherShape, params: &AdjustParams, current: 
 /// A lowering step of [`lowered_pose`] is taken only where this many
 /// steps are clear: the feather keeps a step's room beneath it, so that
 /// the next small motion does not make it meet what it came down onto
-/// and be lifted again (lowering to the last clear step doubled the
-/// animated default coat's pops; BENCHMARKS.md, "Issue #30, session
-/// 15").
+/// and be lifted again (lowering to the last clear step made the animated
+/// coat pop more; BENCHMARKS.md, "Issue #30, session 15").
 const LOWERING_ROOM: f32 = 2.0;
 
 /// A bent feather lying clear at `current` whose surroundings drifted

@@ -308,10 +308,9 @@ fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
 /// The share of the settle rate a lowering's pitch step must reach to go
 /// on: a feather that came down by a whole step of pitch lowers again
 /// next frame and brings what lies on it to try a step down in this one;
-/// after a half step or a bend it rests. Going on after every step lowered
-/// the animated coat further (built-in swim, 30 frames: tip median 0.190
-/// against 0.205) but visited 3.7 times as many feathers a frame
-/// (BENCHMARKS.md, "Issue #30, session 15").
+/// after a half step or a bend it rests. Going on after every step lowers
+/// the animated coat a little further but visits several times as many
+/// feathers a frame (BENCHMARKS.md, "Issue #30, session 15").
 const WHOLE_STEP: f32 = 0.99;
 
 /// A bent feather whose surroundings drifted, or whose obstacle sank,
