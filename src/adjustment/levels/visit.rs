@@ -255,13 +255,13 @@ pub(super) fn adjust_one(
             return Visit::Verified;
         }
         // Resting: kept, its surroundings recorded afresh.
-        let outcome = AdjustOutcome { pose: poses[i], collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
+        let outcome = kept(poses[i], DrapeRoute::Lowered);
         return Visit::Adjusted(outcome, poses[i]);
     }
     if (verify || local)
         && let Some(pose) = repaired(inputs, i, poses[i], posed, worker)
     {
-        let outcome = AdjustOutcome { pose, collision_tests: 0, clamped: false, drape: DrapeRoute::Repaired };
+        let outcome = kept(pose, DrapeRoute::Repaired);
         return Visit::Adjusted(outcome, pose);
     }
     worker.obstacles.clear();
@@ -305,6 +305,12 @@ fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
         && pose.scale >= 1.0
 }
 
+/// The outcome of a feather kept in place at `pose` by `route` (no
+/// obstacle rasterised, no limit bound).
+fn kept(pose: FeatherPose, route: DrapeRoute) -> AdjustOutcome {
+    AdjustOutcome { pose, collision_tests: 0, clamped: false, drape: route }
+}
+
 /// The share of the settle rate a lowering's pitch step must reach to go
 /// on: a feather that came down by a whole step of pitch lowers again
 /// next frame and brings what lies on it to try a step down in this one;
@@ -326,7 +332,7 @@ fn lowered(
     let (frame, shape, params) = (&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let feather = SettlingFeather { frame, shape, params, body: inputs.body, rate: inputs.settle_rate };
     let step = lowered_pose(feather, pose, boxes, &mut worker.field)?;
-    let outcome = AdjustOutcome { pose: step, collision_tests: 0, clamped: false, drape: DrapeRoute::Lowered };
+    let outcome = kept(step, DrapeRoute::Lowered);
     // A whole step of pitch settles on, and pulls in what lies on it (its
     // solved pose is its lowest); a smaller step ends the lowering.
     let whole = pose.pitch - step.pitch >= WHOLE_STEP * inputs.settle_rate;
