@@ -118,6 +118,17 @@ impl<T: Copy + Default> Csr<T> {
         self.cursor.reserve(rows.saturating_sub(self.cursor.len()));
     }
 
+    /// Room for builds (or copies) of up to `items` items without
+    /// allocating.
+    pub fn reserve_items(&mut self, items: usize) {
+        self.items.reserve(items.saturating_sub(self.items.len()));
+    }
+
+    /// The items the rows have room for without allocating.
+    pub fn items_capacity(&self) -> usize {
+        self.items.capacity()
+    }
+
     /// First pass of a build: `rows` empty rows, every count 0.
     pub fn begin(&mut self, rows: usize) {
         self.offsets.clear();

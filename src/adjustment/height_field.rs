@@ -149,7 +149,24 @@ pub struct HeightField {
     pub(crate) local_body: Vec<[Vec3; 3]>,
 }
 
+/// The skin triangles under one feather the drape's scratch makes room for
+/// up front ([`HeightField::reserve_drape`]); a feather over more grows it.
+const DRAPE_SKIN_ROOM: usize = 4096;
+
 impl HeightField {
+    /// Room for the drape of a feather with up to `obstacles` obstacles
+    /// over up to `skin` skin triangles (at most [`DRAPE_SKIN_ROOM`]): the
+    /// scratch a drape fills is sized by the geometry it meets, and
+    /// feathers draped rarely (an incremental step keeps most in place)
+    /// would otherwise reach its largest size only after many frames.
+    pub(crate) fn reserve_drape(&mut self, obstacles: usize, skin: usize) {
+        let skin = skin.min(DRAPE_SKIN_ROOM);
+        let swept = obstacles * crate::feather::MAX_TRIANGLES + skin;
+        self.local_obstacles.reserve(obstacles.saturating_sub(self.local_obstacles.len()));
+        self.local_body.reserve(skin.saturating_sub(self.local_body.len()));
+        self.swept.reserve(swept.saturating_sub(self.swept.len()));
+    }
+
     /// A field of `u` cells along the shaft and `v` across (at least 2 and 3).
     pub fn new(u: usize, v: usize) -> Self {
         let mut f = Self {

@@ -179,6 +179,14 @@ const TOUCHING: u8 = 2;
 const UNKNOWN: u8 = 3;
 
 impl Contacts {
+    /// Room for frames of up to `entries` candidate entries (the
+    /// candidate rows' capacity), so that a frame whose rows hold more than
+    /// any before allocates nothing here.
+    pub fn reserve_entries(&mut self, entries: usize) {
+        self.touch.reserve(entries.saturating_sub(self.touch.len()));
+        self.indices.reserve(entries.saturating_sub(self.indices.len()));
+    }
+
     /// Every feather's footprint and sphere at its current pose, and for
     /// every candidate entry `(i, j)` with j earlier than i by `rank`
     /// whether j's sphere reaches i's footprint, with or without the pose

@@ -147,6 +147,7 @@ fn repose(
     }
     let posed = Posed { frames: &coat.frames, shapes: &dressing.shapes, poses: &coat.poses };
     let candidates = coat.neighbourhoods.obstacle_csr();
+    step.contacts.reserve_entries(coat.neighbourhoods.obstacle_capacity());
     step.contacts.update(posed, &dressing.adjust_params, candidates, coat.order.ranks(), progress);
     progress.check(Phase::Ordering, 0.3)?;
     Ok(neighbourhood_seconds)
@@ -295,6 +296,7 @@ fn first_pass(
     let rows = step.contacts.obstacle_rows(candidates, coat.order.ranks());
     let longest = (0..dressing.len()).map(|i| candidates.row(i).len()).max().unwrap_or(0);
     work.adjuster.reserve_obstacles(longest);
+    work.adjuster.reserve_dependents(coat.neighbourhoods.obstacle_capacity());
     let selection = pass.selection(&step.seeds, rule.verifies().then_some(&step.suspects[..]));
     let keep_going = |done| progress.check(Phase::Adjusting, done).is_ok();
     let stats = pass.run(Walk::Levels, &mut work.adjuster, &mut coat.poses, rows, selection, &keep_going);

@@ -46,6 +46,7 @@ pub(super) fn remember(coat: &Coat, step: &mut StepWorkspace) {
     step.previous_frames.extend_from_slice(&coat.frames);
     step.previous_ranks.clear();
     step.previous_ranks.extend_from_slice(coat.order.ranks());
+    step.previous_candidates.reserve_items(coat.neighbourhoods.obstacle_capacity());
     step.previous_candidates.copy_from(coat.obstacle_candidates());
 }
 

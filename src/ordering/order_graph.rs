@@ -305,6 +305,11 @@ impl PriorityOrder {
         self.became_prior.clear();
         self.gained_prior.clear();
         self.moved.clear();
+        // Room for every pair to be suppressed and retried: how many are
+        // follows the coat's state, and the heap must not creep up with it.
+        let pairs = self.pairs.len();
+        self.suppressed.reserve(pairs.saturating_sub(self.suppressed.len()));
+        self.retry.reserve(pairs.saturating_sub(self.retry.len()));
     }
 
     pub(super) fn incidence(&self, node: u32) -> &[Incidence] {

@@ -126,6 +126,16 @@ pub(crate) struct BodyScratch {
     distances: Vec<f32>,
 }
 
+impl BodyScratch {
+    /// Room for queries and skin searches over up to `triangles` body
+    /// triangles (each lists a triangle at most once), so that a rare wide
+    /// one never grows the buffers.
+    pub(crate) fn reserve(&mut self, triangles: usize) {
+        self.ids.reserve(triangles.saturating_sub(self.ids.len()));
+        self.distances.reserve(triangles.saturating_sub(self.distances.len()));
+    }
+}
+
 /// [`penetrates_body`], testing body triangle `hint` first (when the
 /// query would return it), and setting `hint` to the body triangle found
 /// crossing. The answer is the same whatever the hint: only the order of

@@ -161,6 +161,13 @@ impl Adjuster {
         &self.settling
     }
 
+    /// Room for the transpose of up to `entries` candidates, so that a
+    /// frame whose candidate rows hold more than any before allocates
+    /// nothing for it.
+    pub fn reserve_dependents(&mut self, entries: usize) {
+        self.dependents.reserve_items(entries);
+    }
+
     /// Room in every worker for `longest` obstacles, so that a later call
     /// with rows up to that long allocates nothing (a frame whose second
     /// pass uses longer rows than the first may come late).
@@ -304,9 +311,10 @@ impl Adjuster {
         // Body queries list each triangle at most once; a rare wide query
         // (a skin search widening far from the feather) must not grow them.
         let triangles = body.triangle_count();
-        self.workers
-            .iter_mut()
-            .for_each(|w| w.field.body_scratch.ids.reserve(triangles.saturating_sub(w.field.body_scratch.ids.len())));
+        self.workers.iter_mut().for_each(|w| {
+            w.field.body_scratch.reserve(triangles);
+            w.field.reserve_drape(longest, triangles);
+        });
         for flags in [&mut self.moved, &mut self.changed, &mut self.adjusted, &mut self.verified, &mut self.settling] {
             flags.clear();
             flags.resize(n, false);

@@ -78,6 +78,7 @@ impl Adjuster {
         // Level lists sized for the worst case (one feather per level, or
         // all in one) from the start, so that sparse frames never grow them.
         self.levels.reserve_rows(n);
+        self.levels.reserve_items(n);
         self.outcomes.reserve(n.saturating_sub(self.outcomes.len()));
         self.levels.begin(levels);
         for &i in order {

@@ -207,6 +207,13 @@ impl Neighbourhoods {
         self.obstacles.view()
     }
 
+    /// How many obstacle candidates the rows have room for: a bound for
+    /// the copies and transposes of them that must not allocate while
+    /// the candidates vary from frame to frame.
+    pub fn obstacle_capacity(&self) -> usize {
+        self.obstacles.items_capacity()
+    }
+
     /// Symmetrises the neighbourhoods into sorted unique `(lo, hi)` pairs with
     /// a counting sort on `lo` followed by a small sort per bucket.
     fn rebuild_pairs(&mut self, n: usize) {
