@@ -106,6 +106,22 @@ pub(crate) fn pose_is_clear_boxed(
     exact_check(&at, pose, scratch, false, &mut CheckHints::default())
 }
 
+/// [`pose_is_clear_boxed`] given the feather's triangles at `pose`
+/// (as [`crate::feather::feather_triangles`] makes them): the same answer
+/// without posing the feather again.
+pub(crate) fn posed_is_clear_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    (pose, triangles): (FeatherPose, &[[Vec3; 3]]),
+    boxes: BoxesOf<'_>,
+    body: &BodyIndex,
+    scratch: &mut HeightField,
+) -> bool {
+    let at = FeatherInPlace { frame, shape, obstacles: boxes, body };
+    let mine = FeatherBoxes::of_posed_feather(frame, shape, pose, triangles);
+    boxes_clear(&mine, &at, pose, scratch, false, &mut CheckHints::default())
+}
+
 /// What made the last exact checks of one feather fail: the obstacle and
 /// body triangle tested first by the next check (poses a little apart
 /// mostly fail on the same one). Only the order of the tests depends on

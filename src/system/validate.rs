@@ -6,7 +6,9 @@ use crate::error::Result;
 use crate::feather::{FeatherTriangles, feather_triangles, pose_change};
 use crate::progress::Progress;
 use crate::stats::{PartReport, ValidationReport};
-use crate::validation::{ProbeSkin, Validation, ValidationInput, validate_part, validate_with_progress};
+use crate::validation::{
+    CheckAudit, ProbeSkin, Validation, ValidationInput, audit_checks, validate_part, validate_with_progress,
+};
 
 /// Probes per feather for the coverage figure of [`System::validate`].
 const COVERAGE_PROBES_PER_FEATHER: usize = 4;
@@ -55,6 +57,17 @@ impl System {
         let input = self.validation_input(&tris, &skin, coverage_probes(members));
         let v = self.pool.install(|| validate_part(&input, &member));
         Some(validation_report(&v))
+    }
+
+    /// The exact checks of the current coat made with the adjuster's
+    /// shortcuts and without them (see [`crate::validation::audit_checks`]):
+    /// how many answers differ. For the tests; slow (every skin face is
+    /// measured).
+    #[doc(hidden)]
+    pub fn audit_exact_checks(&self) -> CheckAudit {
+        let tris = self.feather_triangle_sets();
+        let c = &self.coat;
+        self.pool.install(|| audit_checks(&tris, &c.frames, &self.dressing.shapes, &c.poses, &c.body))
     }
 
     /// What a validation of the current coat looks at, with the coverage

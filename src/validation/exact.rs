@@ -13,6 +13,7 @@ use crate::progress::{Phase, Progress};
 use crate::triangle_grid::Aabb;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::cell::OnceCell;
 
 /// Feathers may cross the body this close to their root (fraction of the
 /// length, along the shaft): that is where they enter the skin.
@@ -173,11 +174,8 @@ fn penetrates_body_posed(
     let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
         return false;
     };
-    // Each triangle prepared once for all its tests.
-    let mut prepared = [Prepared::of(&part[0]); 2 * MAX_TRIANGLES];
-    for (p, t) in prepared.iter_mut().zip(part.iter()).skip(1) {
-        *p = Prepared::of(t);
-    }
+    // Each triangle prepared once, when it first reaches the exact test.
+    let prepared: [OnceCell<Prepared>; 2 * MAX_TRIANGLES] = std::array::from_fn(|_| OnceCell::new());
     let prepared = &prepared[..part.len().min(2 * MAX_TRIANGLES)];
     // Every part of a straight feather lies in its plane: a body triangle
     // wholly on one side of it crosses none of them. Nor does a part lying
@@ -191,7 +189,11 @@ fn penetrates_body_posed(
         let axis = SeparatingAxis::new(body.normal(t), &corners, margin);
         let mut tri = None;
         prepared.iter().zip(part.iter()).any(|(p, pt)| {
-            !axis.separates(pt) && prepared_intersect(p, tri.get_or_insert_with(|| Prepared::of(&corners)))
+            !axis.separates(pt)
+                && prepared_intersect(
+                    p.get_or_init(|| Prepared::of(pt)),
+                    tri.get_or_insert_with(|| Prepared::of(&corners)),
+                )
         })
     };
     // The box query returns exactly the triangles whose boxes overlap
@@ -218,13 +220,18 @@ fn penetrates_body_posed(
     }
     let mut judged: [(Vec3, Option<bool>); 12] = [(Vec3::NAN, None); 12];
     let mut count = 0;
+    // The nearest skin lies within the way to the root's skin point, or to
+    // a point judged before plus that point's distance from the skin.
+    let mut last = (frame.position, 0.0f32);
     let mut side = |p: Vec3| {
         if let Some(&(_, s)) =
             judged[..count].iter().find(|(q, _)| q.to_array().map(f32::to_bits) == p.to_array().map(f32::to_bits))
         {
             return s;
         }
-        let s = side_of_skin(body, p, shape.length, ids, distances);
+        let bound = (p - frame.position).length().min(last.1 + (p - last.0).length());
+        let (s, distance) = side_of_skin(body, p, (shape.length, bound), ids, distances);
+        last = distance.map_or((frame.position, 0.0), |d| (p, d));
         if count < judged.len() {
             judged[count] = (p, s);
             count += 1;
@@ -238,22 +245,38 @@ fn penetrates_body_posed(
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
     triangles: FeatherTriangles,
-    prepared: [Prepared; MAX_TRIANGLES],
-    boxes: [Aabb; MAX_TRIANGLES],
+    /// Each triangle prepared for the exact test when it first meets one.
+    prepared: [OnceCell<Prepared>; MAX_TRIANGLES],
+    /// The triangles' boxes, side by side.
+    boxes: BoxLanes,
+    /// Each triangle's span along its own normal.
+    axes: [SeparatingAxis; MAX_TRIANGLES],
     whole: Aabb,
+    /// The largest coordinate of any triangle (for the rounding allowance).
+    size: f32,
     plane: Option<FlatPlane>,
 }
 
 impl FeatherBoxes {
     pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
-        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
-        let mut prepared = [Prepared::of(&triangles[0]); MAX_TRIANGLES];
-        for (k, t) in triangles.iter().enumerate().skip(1) {
-            boxes[k] = Aabb::of_triangle(t);
-            prepared[k] = Prepared::of(t);
+        let mut boxes = BoxLanes::EMPTY;
+        let mut axes = [SeparatingAxis::NONE; MAX_TRIANGLES];
+        let mut whole = Aabb::of_triangle(&triangles[0]);
+        for (k, t) in triangles.iter().enumerate() {
+            let b = Aabb::of_triangle(t);
+            boxes.set(k, &b);
+            whole = whole.union(&b);
+            axes[k] = SeparatingAxis::of_triangle(t);
         }
-        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
-        Self { triangles: FeatherTriangles::from_slice(triangles), prepared, boxes, whole, plane: None }
+        Self {
+            triangles: FeatherTriangles::from_slice(triangles),
+            prepared: std::array::from_fn(|_| OnceCell::new()),
+            boxes,
+            axes,
+            whole,
+            size: whole.min.abs().max(whole.max.abs()).max_element(),
+            plane: None,
+        }
     }
 
     /// The boxes of a flat part of a posed feather (one segment of a bent
@@ -274,8 +297,18 @@ impl FeatherBoxes {
     /// feather lies in (triangles wholly on one side of it are ruled out
     /// without the exact test): the same answers as [`FeatherBoxes::new`].
     pub(crate) fn of_feather(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        Self::of_posed_feather(frame, shape, pose, &crate::feather::feather_triangles(frame, shape, pose))
+    }
+
+    /// [`FeatherBoxes::of_feather`] given the feather's triangles at `pose`.
+    pub(crate) fn of_posed_feather(
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        pose: FeatherPose,
+        triangles: &[[Vec3; 3]],
+    ) -> Self {
         let plane = FlatPlane::of_straight_feather(frame, shape, pose);
-        Self { plane, ..Self::new(&crate::feather::feather_triangles(frame, shape, pose)) }
+        Self { plane, ..Self::new(triangles) }
     }
 
     /// [`penetrates_body_hinted`] for the feather and pose these boxes were
@@ -309,18 +342,78 @@ impl FeatherBoxes {
         // Over b's triangles first: most miss this feather's box, or lie
         // beyond its plane, and are ruled out once instead of once per
         // triangle of this feather (the same pairs reach the exact test).
-        let n = self.triangles.len();
         b.triangles.iter().zip(&b.boxes).any(|(tb, box_b)| {
             if box_b.is_point() || !self.whole.overlaps(box_b) || self.plane.is_some_and(|p| p.apart(tb)) {
                 return false;
             }
-            let mut prepared_b = None;
-            self.prepared[..n].iter().zip(&self.boxes[..n]).any(|(ta, box_a)| {
-                !box_a.is_point()
-                    && box_a.overlaps(box_b)
-                    && prepared_intersect(ta, prepared_b.get_or_insert_with(|| Prepared::of(tb)))
+            // The rounding allowance of b's projections (see SeparatingAxis).
+            let size_b = box_b.min.abs().max(box_b.max.abs()).max_element();
+            let (mut prepared_b, mut axis_b) = (None, None);
+            let mut overlapping = self.boxes.overlapping(box_b);
+            std::iter::from_fn(|| {
+                (overlapping != 0).then(|| {
+                    let k = overlapping.trailing_zeros() as usize;
+                    overlapping &= overlapping - 1;
+                    k
+                })
+            })
+            .any(|k| {
+                let ta = &self.triangles[k];
+                !self.axes[k].separates_sized(tb, size_b)
+                    && !axis_b.get_or_insert_with(|| SeparatingAxis::of_triangle(tb)).separates_sized(ta, self.size)
+                    && prepared_intersect(
+                        self.prepared[k].get_or_init(|| Prepared::of(ta)),
+                        prepared_b.get_or_insert_with(|| Prepared::of(tb)),
+                    )
             })
         })
+    }
+}
+
+/// Lanes of boxes (one per triangle of a feather) laid out coordinate by
+/// coordinate, so that one box is tested against all of them at once.
+#[derive(Clone, Copy, Debug)]
+struct BoxLanes {
+    min: [[f32; BOX_LANES]; 3],
+    max: [[f32; BOX_LANES]; 3],
+    /// The lanes set, as bits.
+    used: u32,
+}
+
+/// Lanes of a [`BoxLanes`]: at least [`MAX_TRIANGLES`], a whole number of
+/// SIMD registers.
+const BOX_LANES: usize = MAX_TRIANGLES.next_multiple_of(8);
+
+impl BoxLanes {
+    /// Every lane empty (min above max: it overlaps nothing).
+    const EMPTY: Self =
+        Self { min: [[f32::INFINITY; BOX_LANES]; 3], max: [[f32::NEG_INFINITY; BOX_LANES]; 3], used: 0 };
+
+    /// Lane `k` holds `b`, unless `b` is a point (a degenerate triangle's,
+    /// which meets nothing): then it stays empty.
+    fn set(&mut self, k: usize, b: &Aabb) {
+        if b.is_point() {
+            return;
+        }
+        for axis in 0..3 {
+            self.min[axis][k] = b.min[axis];
+            self.max[axis][k] = b.max[axis];
+        }
+        self.used |= 1 << k;
+    }
+
+    /// The lanes whose box shares a point with `b`, as bits (lane k is bit
+    /// k): the answers of [`Aabb::overlaps`] lane by lane.
+    #[inline]
+    fn overlapping(&self, b: &Aabb) -> u32 {
+        let mut hit = [true; BOX_LANES];
+        for axis in 0..3 {
+            let (lo, hi) = (b.min[axis], b.max[axis]);
+            for ((h, &min), &max) in hit.iter_mut().zip(&self.min[axis]).zip(&self.max[axis]) {
+                *h &= min <= hi && lo <= max;
+            }
+        }
+        self.used & hit.iter().enumerate().fold(0, |bits, (k, &h)| bits | (u32::from(h) << k))
     }
 }
 
@@ -392,6 +485,9 @@ struct SeparatingAxis {
 }
 
 impl SeparatingAxis {
+    /// An axis that separates nothing.
+    const NONE: Self = Self { axis: Vec3::ZERO, lo: f32::NEG_INFINITY, hi: f32::INFINITY };
+
     /// The span of `t` along `axis` (a face normal; zero never separates),
     /// widened by `margin` and the rounding allowance.
     #[inline]
@@ -402,11 +498,33 @@ impl SeparatingAxis {
         Self { axis, lo: d[0].min(d[1]).min(d[2]) - m, hi: d[0].max(d[1]).max(d[2]) + m }
     }
 
+    /// The span of `t` along its own unit normal (a degenerate triangle's
+    /// separates nothing): a triangle wholly beyond it lies on one side of
+    /// `t`'s plane, clear of the rounding.
+    #[inline]
+    fn of_triangle(t: &[Vec3; 3]) -> Self {
+        match (t[1] - t[0]).cross(t[2] - t[0]).try_normalize() {
+            Some(axis) => Self::new(axis, t, 0.0),
+            None => Self::NONE,
+        }
+    }
+
     /// Whether triangle `t` lies wholly beyond the span, on one side.
     #[inline]
     fn separates(&self, t: &[Vec3; 3]) -> bool {
         let d = t.map(|p| self.axis.dot(p));
         (d[0] > self.hi && d[1] > self.hi && d[2] > self.hi) || (d[0] < self.lo && d[1] < self.lo && d[2] < self.lo)
+    }
+
+    /// [`separates`](Self::separates), with the rounding allowance of
+    /// `t`'s projections added for coordinates up to `size` (the span's
+    /// own allowance covers only its triangle's coordinates).
+    #[inline]
+    fn separates_sized(&self, t: &[Vec3; 3], size: f32) -> bool {
+        let m = 1e-5 * size;
+        let d = t.map(|p| self.axis.dot(p));
+        let (hi, lo) = (self.hi + m, self.lo - m);
+        (d[0] > hi && d[1] > hi && d[2] > hi) || (d[0] < lo && d[1] < lo && d[2] < lo)
     }
 }
 
@@ -437,38 +555,83 @@ impl BoxedTriangles {
 
 /// Which side of the body surface `p` is on: `Some(true)` under it,
 /// `Some(false)` above it, `None` on it (within the contact tolerance) or
-/// with no skin within `reach`. The side is judged from the nearest skin
-/// point by the normals of every face at the nearest distance, summed, so
-/// that edges and corners of the skin judge by all their faces. The search
-/// starts small and widens, since feather corners are usually near skin.
-/// Faces that a box test puts beyond the tie distance of the nearest found
-/// so far are not measured (they could be neither nearest nor tied).
+/// with no skin within `reach`; with the distance to the nearest skin
+/// point when there is one. The side is judged from the nearest skin point
+/// by the normals of every face within the tie distance of it, summed in
+/// triangle order, so that edges and corners of the skin judge by all their
+/// faces and the answer does not depend on how the search went.
+///
+/// `bound` is a distance within which skin is known to lie (the root's
+/// own skin point, or the nearest distance of a point judged before plus
+/// the way from it; infinite when none is known): the first search reaches
+/// just that far. Without one the search starts small and widens, since
+/// feather corners are usually near skin. Faces that a box test puts
+/// beyond the tie distance of the nearest found so far are not measured
+/// (they could be neither nearest nor tied).
 fn side_of_skin(
     body: &BodyIndex,
     p: Vec3,
-    reach: f32,
+    (reach, bound): (f32, f32),
     scratch: &mut Vec<u32>,
     distances: &mut Vec<f32>,
-) -> Option<bool> {
-    let tolerance = 1e-6 * reach.max(p.abs().max_element());
-    let tie = |nearest: f32| nearest * (1.0 + 1e-4) + tolerance;
-    let mut radius = reach / 64.0;
+) -> (Option<bool>, Option<f32>) {
+    let tolerance = skin_tolerance(p, reach);
+    let tie = |nearest: f32| tie_distance(nearest, tolerance);
+    // Widened far beyond the rounding of the bound's own arithmetic.
+    let known = tie(bound) * (1.0 + 1e-4);
+    let mut radius = if known < reach { known } else { reach / 64.0 };
     let nearest = loop {
         if let Some(n) = body.closest_point_keeping(p, radius, tie, scratch, distances) {
             break n;
         }
         if radius >= reach {
-            return None;
+            return (None, None);
         }
-        radius = (radius * 4.0).min(reach);
+        // The widening steps of a search without a bound, from past this one.
+        let mut next = reach / 64.0;
+        while next <= radius && next < reach {
+            next *= 4.0;
+        }
+        radius = next.min(reach);
     };
+    let distance = Some(nearest.distance);
     if nearest.distance <= tolerance {
-        return None;
+        return (None, distance);
     }
     let tie = tie(nearest.distance);
-    let normal: Vec3 =
-        scratch.iter().zip(distances.iter()).filter(|&(_, &d)| d <= tie).map(|(&t, _)| body.normal(t)).sum();
-    Some((p - nearest.point).dot(normal) < 0.0)
+    if tie > radius {
+        // Every face within the tie distance, not only those the search reached.
+        body.closest_point_keeping(p, tie, |_| tie, scratch, distances);
+    }
+    // The tied faces, kept in `scratch` in triangle order.
+    let mut kept = 0;
+    for k in 0..scratch.len() {
+        if distances[k] <= tie {
+            scratch[kept] = scratch[k];
+            kept += 1;
+        }
+    }
+    scratch.truncate(kept);
+    scratch.sort_unstable();
+    (Some(under_tied_faces(body, p, nearest.point, scratch)), distance)
+}
+
+/// Distances from `p` to the skin within this are contact (a feather of
+/// length `reach`).
+pub(super) fn skin_tolerance(p: Vec3, reach: f32) -> f32 {
+    1e-6 * reach.max(p.abs().max_element())
+}
+
+/// Faces this near `p` count as tied with the nearest at `nearest`.
+pub(super) fn tie_distance(nearest: f32, tolerance: f32) -> f32 {
+    nearest * (1.0 + 1e-4) + tolerance
+}
+
+/// Whether `p` lies under the skin whose nearest point is `point`, judged
+/// by the normals of the faces `tied` (sorted) summed in that order.
+pub(super) fn under_tied_faces(body: &BodyIndex, p: Vec3, point: Vec3, tied: &[u32]) -> bool {
+    let normal: Vec3 = tied.iter().map(|&t| body.normal(t)).sum();
+    (p - point).dot(normal) < 0.0
 }
 
 crate::memory::heap_size_of_fields!(BodyScratch { part, ids, distances });

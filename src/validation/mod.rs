@@ -3,11 +3,13 @@
 //! answer for any thread count: pairs and indices come out sorted, counts
 //! are integers and sums run in index order.
 
+mod audit;
 mod coverage;
 mod exact;
 mod groom;
 mod lie;
 
+pub use audit::{CheckAudit, audit_checks};
 pub use coverage::{CoverageCount, Probe, ProbeSkin, count_covered, is_buried, surface_probes};
 pub(crate) use exact::{BodyScratch, BoxedTriangles, FeatherBoxes, ROOT_ALLOWANCE};
 pub use exact::{body_penetrations, feather_beyond_root};

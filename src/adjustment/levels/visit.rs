@@ -2,7 +2,7 @@
 //! or adjusted (and settled); what every feather of a level reads, and the
 //! parallel run of one level.
 
-use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, pose_is_clear_boxed};
+use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, posed_is_clear_boxed};
 use super::super::drape::repair_drape;
 use super::super::obstacle::ObstacleBoxes;
 use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
@@ -408,7 +408,7 @@ pub(super) fn check_clear(
         !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
     } else {
         let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
-        pose_is_clear_boxed(frame, shape, poses[i], boxes, inputs.body, &mut worker.field)
+        posed_is_clear_boxed(frame, shape, (poses[i], &posed.triangles[i]), boxes, inputs.body, &mut worker.field)
     }
 }
 
