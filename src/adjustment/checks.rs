@@ -6,7 +6,7 @@
 #[cfg(test)]
 use super::ObstacleFeather;
 use super::height_field::GridExtent;
-use super::obstacle::ObstacleBoxes;
+use super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::{AdjustParams, HeightField};
 use crate::body::{Aabb, BodyIndex};
 use crate::feather::{FeatherPose, FeatherShape};
@@ -90,7 +90,8 @@ pub(crate) fn pose_is_clear(
     scratch: &mut HeightField,
 ) -> bool {
     let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
-    pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes }, body, scratch)
+    let bounds: Vec<ObstacleBounds> = boxes.iter().map(ObstacleBoxes::bounds).collect();
+    pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes, bounds: &bounds }, body, scratch)
 }
 
 /// `pose_is_clear` with the obstacles' [`ObstacleBoxes`] made already.
@@ -134,11 +135,13 @@ pub(super) struct CheckHints {
 }
 
 /// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
-/// `all[ids[k]]`, or `all[k]` without `ids`.
+/// `all[ids[k]]`, or `all[k]` without `ids`; `bounds` holds the
+/// [`ObstacleBounds`] of `all`, in its order.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxesOf<'a> {
     pub(crate) ids: Option<&'a [u32]>,
     pub(crate) all: &'a [ObstacleBoxes],
+    pub(crate) bounds: &'a [ObstacleBounds],
 }
 
 impl<'a> BoxesOf<'a> {
@@ -162,11 +165,11 @@ impl<'a> BoxesOf<'a> {
         let ball = Aabb::around(frame.position, radius);
         within.clear();
         within.extend((0..self.len()).filter_map(|k| {
-            let b = self.get(k);
+            let [triangles, top] = self.bounds_of(k);
             let index = self.ids.map_or(k as u32, |ids| ids[k]);
-            (b.triangles.bounds().overlaps(&ball) || b.top.bounds().overlaps(&ball)).then_some(index)
+            (triangles.overlaps(&ball) || top.overlaps(&ball)).then_some(index)
         }));
-        BoxesOf { ids: Some(within), all: self.all }
+        BoxesOf { ids: Some(within), ..*self }
     }
 
     fn len(&self) -> usize {
@@ -175,10 +178,17 @@ impl<'a> BoxesOf<'a> {
 
     #[inline]
     fn get(&self, k: usize) -> &ObstacleBoxes {
-        match self.ids {
-            Some(ids) => &self.all[ids[k] as usize],
-            None => &self.all[k],
-        }
+        &self.all[self.index(k)]
+    }
+
+    #[inline]
+    fn bounds_of(&self, k: usize) -> ObstacleBounds {
+        self.bounds[self.index(k)]
+    }
+
+    #[inline]
+    fn index(&self, k: usize) -> usize {
+        self.ids.map_or(k, |ids| ids[k] as usize)
     }
 }
 
@@ -201,9 +211,13 @@ fn any_index(n: usize, hint: &mut Option<usize>, test: impl Fn(usize) -> bool) -
 /// obstacle's [`raised_top`](super::obstacle::raised_top), trying `hint` first and setting it to the
 /// one found.
 fn meets_obstacle(mine: &FeatherBoxes, boxes: BoxesOf<'_>, top: bool, hint: &mut Option<usize>) -> bool {
+    // The outer box first: most obstacles are ruled out by it, without
+    // reading their triangles.
     any_index(boxes.len(), hint, |k| {
-        let b = boxes.get(k);
-        mine.intersects_boxed(if top { &b.top } else { &b.triangles })
+        mine.bounds().overlaps(&boxes.bounds_of(k)[usize::from(top)]) && {
+            let b = boxes.get(k);
+            mine.intersects_boxed(if top { &b.top } else { &b.triangles })
+        }
     })
 }
 

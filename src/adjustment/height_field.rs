@@ -136,6 +136,8 @@ pub struct HeightField {
     /// Scratch of the exact checks of one feather: its obstacles' boxes
     /// when the caller gives none.
     pub(crate) boxes: Vec<super::obstacle::ObstacleBoxes>,
+    /// The outer boxes of `boxes`, in its order.
+    pub(crate) bounds: Vec<super::obstacle::ObstacleBounds>,
     /// The obstacles within reach of one size of the exact pitch sweep.
     pub(crate) sweep_obstacles: Vec<u32>,
     /// The rasterised obstacles' triangles in the root frame (kept for
@@ -194,6 +196,7 @@ impl HeightField {
             row_span: Vec::new(),
             body_scratch: BodyScratch::default(),
             boxes: Vec::new(),
+            bounds: Vec::new(),
             sweep_obstacles: Vec::new(),
             local_obstacles: Vec::new(),
             swept: Vec::new(),
@@ -461,7 +464,7 @@ impl HeightField {
 
 crate::memory::heap_size_of_fields!(HeightField {
     obstacle, body, need, col_x, row_y, col_near, col_far, inv_near, inv_far, row_span, body_scratch, boxes,
-    sweep_obstacles, local_obstacles, swept, local_body
+    bounds, sweep_obstacles, local_obstacles, swept, local_body
 } plain { u, v, dx, dy, y_min, floor, socket_x, body_floor, clearance_from, shape, need_for, first_col });
 
 #[cfg(test)]

@@ -54,12 +54,14 @@ pub fn adjust_feather(
     steps: AdjustSteps,
     scratch: &mut HeightField,
 ) -> AdjustOutcome {
-    let mut boxes = std::mem::take(&mut scratch.boxes);
+    let (mut boxes, mut bounds) = (std::mem::take(&mut scratch.boxes), std::mem::take(&mut scratch.bounds));
     boxes.clear();
     boxes.extend(obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)));
-    let at = FeatherInPlace { frame, shape, obstacles: BoxesOf { ids: None, all: &boxes }, body };
+    bounds.clear();
+    bounds.extend(boxes.iter().map(ObstacleBoxes::bounds));
+    let at = FeatherInPlace { frame, shape, obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds }, body };
     let outcome = adjust_feather_boxed(&at, previous, obstacles, params, steps, scratch);
-    scratch.boxes = boxes;
+    (scratch.boxes, scratch.bounds) = (boxes, bounds);
     outcome
 }
 

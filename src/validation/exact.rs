@@ -333,6 +333,11 @@ impl FeatherBoxes {
         self.intersects_boxed(&BoxedTriangles::new(b))
     }
 
+    /// The box of all its triangles.
+    pub(crate) fn bounds(&self) -> &Aabb {
+        &self.whole
+    }
+
     /// [`FeatherBoxes::intersects`] against triangles whose boxes are
     /// known: the same answer.
     pub(crate) fn intersects_boxed(&self, b: &BoxedTriangles) -> bool {
@@ -342,22 +347,15 @@ impl FeatherBoxes {
         // Over b's triangles first: most miss this feather's box, or lie
         // beyond its plane, and are ruled out once instead of once per
         // triangle of this feather (the same pairs reach the exact test).
-        b.triangles.iter().zip(&b.boxes).any(|(tb, box_b)| {
-            if box_b.is_point() || !self.whole.overlaps(box_b) || self.plane.is_some_and(|p| p.apart(tb)) {
+        lanes(b.boxes.overlapping(&self.whole)).any(|j| {
+            let (tb, box_b) = (&b.triangles[j], &b.boxes.get(j));
+            if self.plane.is_some_and(|p| p.apart(tb)) {
                 return false;
             }
             // The rounding allowance of b's projections (see SeparatingAxis).
             let size_b = box_b.min.abs().max(box_b.max.abs()).max_element();
             let (mut prepared_b, mut axis_b) = (None, None);
-            let mut overlapping = self.boxes.overlapping(box_b);
-            std::iter::from_fn(|| {
-                (overlapping != 0).then(|| {
-                    let k = overlapping.trailing_zeros() as usize;
-                    overlapping &= overlapping - 1;
-                    k
-                })
-            })
-            .any(|k| {
+            lanes(self.boxes.overlapping(box_b)).any(|k| {
                 let ta = &self.triangles[k];
                 !self.axes[k].separates_sized(tb, size_b)
                     && !axis_b.get_or_insert_with(|| SeparatingAxis::of_triangle(tb)).separates_sized(ta, self.size)
@@ -402,19 +400,42 @@ impl BoxLanes {
         self.used |= 1 << k;
     }
 
+    /// The box in lane `k` (set).
+    #[inline]
+    fn get(&self, k: usize) -> Aabb {
+        Aabb {
+            min: Vec3::new(self.min[0][k], self.min[1][k], self.min[2][k]),
+            max: Vec3::new(self.max[0][k], self.max[1][k], self.max[2][k]),
+        }
+    }
+
     /// The lanes whose box shares a point with `b`, as bits (lane k is bit
     /// k): the answers of [`Aabb::overlaps`] lane by lane.
     #[inline]
     fn overlapping(&self, b: &Aabb) -> u32 {
-        let mut hit = [true; BOX_LANES];
+        // Branch-free, lane by lane, so that the compiler can test several
+        // lanes in one instruction.
+        let mut hit = [1u32; BOX_LANES];
         for axis in 0..3 {
             let (lo, hi) = (b.min[axis], b.max[axis]);
             for ((h, &min), &max) in hit.iter_mut().zip(&self.min[axis]).zip(&self.max[axis]) {
-                *h &= min <= hi && lo <= max;
+                *h &= u32::from(min <= hi) & u32::from(lo <= max);
             }
         }
-        self.used & hit.iter().enumerate().fold(0, |bits, (k, &h)| bits | (u32::from(h) << k))
+        self.used & hit.iter().enumerate().fold(0, |bits, (k, &h)| bits | (h << k))
     }
+}
+
+/// The lanes whose bits are set in `bits`, lowest first.
+#[inline]
+fn lanes(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
 }
 
 /// The margin of the plane tests of a posed feather (see [`FlatPlane`]).
@@ -533,17 +554,20 @@ impl SeparatingAxis {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxedTriangles {
     triangles: FeatherTriangles,
-    boxes: [Aabb; MAX_TRIANGLES],
+    /// The triangles' boxes side by side (a point's lane left empty).
+    boxes: BoxLanes,
     whole: Aabb,
 }
 
 impl BoxedTriangles {
     pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
-        let mut boxes = [Aabb::of_triangle(&triangles[0]); MAX_TRIANGLES];
-        for (k, t) in triangles.iter().enumerate().skip(1) {
-            boxes[k] = Aabb::of_triangle(t);
+        let mut boxes = BoxLanes::EMPTY;
+        let mut whole = Aabb::of_triangle(&triangles[0]);
+        for (k, t) in triangles.iter().enumerate() {
+            let b = Aabb::of_triangle(t);
+            boxes.set(k, &b);
+            whole = whole.union(&b);
         }
-        let whole = boxes[1..triangles.len()].iter().fold(boxes[0], |a, b| a.union(b));
         Self { triangles: FeatherTriangles::from_slice(triangles), boxes, whole }
     }
 

@@ -19,7 +19,7 @@
 //! poses either way.
 
 use super::checks::bounding_sphere;
-use super::obstacle::ObstacleBoxes;
+use super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::{AdjustParams, AdjustSteps, DrapeRoute, HeightField};
 use crate::body::BodyIndex;
 use crate::csr::{Csr, CsrView};
@@ -31,7 +31,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
-    triangles, spheres, boxes, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
+    triangles, spheres, boxes, bounds, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
 } plain { #[cfg(test)] walk_share, #[cfg(test)] pairs_only });
 
 mod scope;
@@ -106,6 +106,8 @@ pub struct Adjuster {
     /// Each feather's triangles and raised top with their boxes, as the
     /// exact checks of the feathers it is an obstacle of meet them.
     boxes: Vec<ObstacleBoxes>,
+    /// The outer boxes of `boxes`, by feather.
+    bounds: Vec<ObstacleBounds>,
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
@@ -367,6 +369,7 @@ impl Adjuster {
         self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
         self.spheres[i] = bounding_sphere(&self.triangles[i]);
         self.boxes[i] = ObstacleBoxes::new(&self.triangles[i], shapes[i].thickness);
+        self.bounds[i] = self.boxes[i].bounds();
         self.adjusted[i] = true;
         stats.adjusted += 1;
         stats.collision_tests += u64::from(o.collision_tests);
@@ -391,13 +394,14 @@ impl Adjuster {
         self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
         self.boxes.resize(frames.len(), unset);
+        self.bounds.resize(frames.len(), unset.bounds());
         let stopped = AtomicBool::new(false);
         self.triangles
             .par_iter_mut()
-            .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut()))
+            .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut().zip(self.bounds.par_iter_mut())))
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
             .enumerate()
-            .for_each(|(k, ((t, (sphere, boxes)), (f, (s, p))))| {
+            .for_each(|(k, ((t, (sphere, (boxes, bounds))), (f, (s, p))))| {
                 if stopped.load(Ordering::Relaxed) || (k % 64 == 0 && !keep_going(0.0)) {
                     stopped.store(true, Ordering::Relaxed);
                     return;
@@ -405,6 +409,7 @@ impl Adjuster {
                 *t = feather_triangles(f, s, *p);
                 *sphere = bounding_sphere(t);
                 *boxes = ObstacleBoxes::new(t, s.thickness);
+                *bounds = boxes.bounds();
             });
     }
 

@@ -4,7 +4,7 @@
 
 use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, posed_is_clear_boxed};
 use super::super::drape::repair_drape;
-use super::super::obstacle::ObstacleBoxes;
+use super::super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
 use super::super::steps::adjust_feather_boxed;
 use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, DrapeRoute, HeightField, ObstacleFeather};
@@ -147,6 +147,7 @@ pub(super) struct PosedGeometry<'a> {
     pub(super) triangles: &'a [FeatherTriangles],
     pub(super) spheres: &'a [(Vec3, f32)],
     pub(super) boxes: &'a [ObstacleBoxes],
+    pub(super) bounds: &'a [ObstacleBounds],
 }
 
 /// Levels with fewer feathers than this are visited on the calling thread.
@@ -276,7 +277,7 @@ pub(super) fn adjust_one(
             far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
         }
     }));
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
     let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
     let solved = adjust_feather_boxed(&at, poses[i], &worker.obstacles, inputs.params, inputs.steps, &mut worker.field);
     if inputs.settle_rate <= 0.0 || solved.pose == poses[i] {
@@ -328,7 +329,7 @@ fn lowered(
     posed: PosedGeometry<'_>,
     worker: &mut Worker,
 ) -> Option<Visit> {
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
     let (frame, shape, params) = (&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let feather = SettlingFeather { frame, shape, params, body: inputs.body, rate: inputs.settle_rate };
     let step = lowered_pose(feather, pose, boxes, &mut worker.field)?;
@@ -364,7 +365,7 @@ fn repaired(
     if inputs.settle_rate <= 0.0 || inputs.shapes[i].segment_count() < 2 {
         return None;
     }
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
     let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
     repair_drape(&at, pose, inputs.params, &mut worker.field)
         .filter(|p| p.pitch <= inputs.params.max_pitch && pose_change(&pose, p) <= REPAIR_MOST)
@@ -407,7 +408,7 @@ pub(super) fn check_clear(
         let mine = FeatherBoxes::new(&mine);
         !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
     } else {
-        let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes };
+        let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
         posed_is_clear_boxed(frame, shape, (poses[i], &posed.triangles[i]), boxes, inputs.body, &mut worker.field)
     }
 }

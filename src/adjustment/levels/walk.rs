@@ -67,7 +67,12 @@ impl Adjuster {
                 continue;
             }
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-            let posed = PosedGeometry { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+            let posed = PosedGeometry {
+                triangles: &self.triangles,
+                spheres: &self.spheres,
+                boxes: &self.boxes,
+                bounds: &self.bounds,
+            };
             let visit = adjust_one(inputs, i, poses, posed, marks, &mut self.workers[0]);
             self.apply(i, &visit, inputs, poses, stats);
             if self.changed[i] {
@@ -114,7 +119,12 @@ impl Adjuster {
             let items = self.levels.row(l);
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
-            let posed = PosedGeometry { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+            let posed = PosedGeometry {
+                triangles: &self.triangles,
+                spheres: &self.spheres,
+                boxes: &self.boxes,
+                bounds: &self.bounds,
+            };
             let done = l as f32 / levels.max(1) as f32;
             run_level(inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
             // A level cut short left some outcomes unvisited: nothing is applied.
@@ -153,7 +163,12 @@ impl Adjuster {
         let items = &self.precheck_items;
         self.precheck_outcomes.clear();
         self.precheck_outcomes.resize(items.len(), Precheck::None);
-        let posed = PosedGeometry { triangles: &self.triangles, spheres: &self.spheres, boxes: &self.boxes };
+        let posed = PosedGeometry {
+            triangles: &self.triangles,
+            spheres: &self.spheres,
+            boxes: &self.boxes,
+            bounds: &self.bounds,
+        };
         let chunk = items.len().div_ceil(self.workers.len()).max(1);
         items
             .par_chunks(chunk)
