@@ -13,7 +13,6 @@ use crate::progress::{Phase, Progress};
 use crate::triangle_grid::Aabb;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::cell::OnceCell;
 
 /// Feathers may cross the body this close to their root (fraction of the
 /// length, along the shaft): that is where they enter the skin.
@@ -174,27 +173,36 @@ fn penetrates_body_posed(
     let Some(bounds) = part.iter().map(Aabb::of_triangle).reduce(|a, b| a.union(&b)) else {
         return false;
     };
-    // Each triangle prepared once, when it first reaches the exact test.
-    let prepared: [OnceCell<Prepared>; 2 * MAX_TRIANGLES] = std::array::from_fn(|_| OnceCell::new());
-    let prepared = &prepared[..part.len().min(2 * MAX_TRIANGLES)];
+    // The part's triangle boxes side by side (it has at most PART_LANES
+    // triangles; any beyond would be tested without their box).
+    let mut part_boxes = BoxLanes::<PART_LANES>::EMPTY;
+    for (k, t) in part.iter().enumerate().take(PART_LANES) {
+        part_boxes.set(k, &Aabb::of_triangle(t));
+    }
+    let unboxed = part.get(PART_LANES..).unwrap_or_default();
     // Every part of a straight feather lies in its plane: a body triangle
     // wholly on one side of it crosses none of them. Nor does a part lying
     // wholly on one side of the body triangle (along its face normal).
     let margin = posed_margin(frame, shape, pose);
     let crossing = |t: u32| {
+        // Only part triangles whose box meets the face's.
+        let near = part_boxes.overlapping(&body.bounds(t));
+        if near == 0 && unboxed.is_empty() {
+            return false;
+        }
         let corners = body.corners(t);
         if plane.is_some_and(|p| p.apart(&corners)) {
             return false;
         }
         let axis = SeparatingAxis::new(body.normal(t), &corners, margin);
         let mut tri = None;
-        prepared.iter().zip(part.iter()).any(|(p, pt)| {
+        // Prepared for the f64 test only when one reaches it (rarely: the
+        // axis rules out nearly every triangle).
+        let mut meets = |pt: &[Vec3; 3]| {
             !axis.separates(pt)
-                && prepared_intersect(
-                    p.get_or_init(|| Prepared::of(pt)),
-                    tri.get_or_insert_with(|| Prepared::of(&corners)),
-                )
-        })
+                && prepared_intersect(&Prepared::of(pt), tri.get_or_insert_with(|| Prepared::of(&corners)))
+        };
+        lanes(near).any(|k| meets(&part[k])) || unboxed.iter().any(meets)
     };
     // The box query returns exactly the triangles whose boxes overlap
     // `bounds` (none when `bounds` is not a proper box).
@@ -245,8 +253,6 @@ fn penetrates_body_posed(
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
     triangles: FeatherTriangles,
-    /// Each triangle prepared for the exact test when it first meets one.
-    prepared: [OnceCell<Prepared>; MAX_TRIANGLES],
     /// The triangles' boxes, side by side.
     boxes: BoxLanes,
     /// Each triangle's span along its own normal.
@@ -270,7 +276,6 @@ impl FeatherBoxes {
         }
         Self {
             triangles: FeatherTriangles::from_slice(triangles),
-            prepared: std::array::from_fn(|_| OnceCell::new()),
             boxes,
             axes,
             whole,
@@ -359,10 +364,7 @@ impl FeatherBoxes {
                 let ta = &self.triangles[k];
                 !self.axes[k].separates_sized(tb, size_b)
                     && !axis_b.get_or_insert_with(|| SeparatingAxis::of_triangle(tb)).separates_sized(ta, self.size)
-                    && prepared_intersect(
-                        self.prepared[k].get_or_init(|| Prepared::of(ta)),
-                        prepared_b.get_or_insert_with(|| Prepared::of(tb)),
-                    )
+                    && prepared_intersect(&Prepared::of(ta), prepared_b.get_or_insert_with(|| Prepared::of(tb)))
             })
         })
     }
@@ -371,9 +373,9 @@ impl FeatherBoxes {
 /// Lanes of boxes (one per triangle of a feather) laid out coordinate by
 /// coordinate, so that one box is tested against all of them at once.
 #[derive(Clone, Copy, Debug)]
-struct BoxLanes {
-    min: [[f32; BOX_LANES]; 3],
-    max: [[f32; BOX_LANES]; 3],
+struct BoxLanes<const N: usize = BOX_LANES> {
+    min: [[f32; N]; 3],
+    max: [[f32; N]; 3],
     /// The lanes set, as bits.
     used: u32,
 }
@@ -382,10 +384,14 @@ struct BoxLanes {
 /// SIMD registers.
 const BOX_LANES: usize = MAX_TRIANGLES.next_multiple_of(8);
 
-impl BoxLanes {
+/// Lanes for the part of a feather beyond its root socket (each triangle
+/// may be clipped into two).
+const PART_LANES: usize = (2 * MAX_TRIANGLES).next_multiple_of(8);
+const _: () = assert!(PART_LANES <= 32, "lanes are bits of a u32");
+
+impl<const N: usize> BoxLanes<N> {
     /// Every lane empty (min above max: it overlaps nothing).
-    const EMPTY: Self =
-        Self { min: [[f32::INFINITY; BOX_LANES]; 3], max: [[f32::NEG_INFINITY; BOX_LANES]; 3], used: 0 };
+    const EMPTY: Self = Self { min: [[f32::INFINITY; N]; 3], max: [[f32::NEG_INFINITY; N]; 3], used: 0 };
 
     /// Lane `k` holds `b`, unless `b` is a point (a degenerate triangle's,
     /// which meets nothing): then it stays empty.
@@ -415,7 +421,7 @@ impl BoxLanes {
     fn overlapping(&self, b: &Aabb) -> u32 {
         // Branch-free, lane by lane, so that the compiler can test several
         // lanes in one instruction.
-        let mut hit = [1u32; BOX_LANES];
+        let mut hit = [1u32; N];
         for axis in 0..3 {
             let (lo, hi) = (b.min[axis], b.max[axis]);
             for ((h, &min), &max) in hit.iter_mut().zip(&self.min[axis]).zip(&self.max[axis]) {
