@@ -107,19 +107,19 @@ pub(crate) fn pose_is_clear_boxed(
     exact_check(&at, pose, scratch, false, &mut CheckHints::default())
 }
 
-/// [`pose_is_clear_boxed`] given the feather's triangles at `pose`
-/// (as [`crate::feather::feather_triangles`] makes them): the same answer
-/// without posing the feather again.
+/// [`pose_is_clear_boxed`] given the feather's own [`ObstacleBoxes`] at
+/// `pose` (its triangles as [`crate::feather::feather_triangles`] makes
+/// them, boxed): the same answer without posing the feather again.
 pub(crate) fn posed_is_clear_boxed(
     frame: &RootFrame,
     shape: &FeatherShape,
-    (pose, triangles): (FeatherPose, &[[Vec3; 3]]),
+    (pose, own): (FeatherPose, &ObstacleBoxes),
     boxes: BoxesOf<'_>,
     body: &BodyIndex,
     scratch: &mut HeightField,
 ) -> bool {
     let at = FeatherInPlace { frame, shape, obstacles: boxes, body };
-    let mine = FeatherBoxes::of_posed_feather(frame, shape, pose, triangles);
+    let mine = FeatherBoxes::of_boxed_feather(frame, shape, pose, &own.triangles);
     boxes_clear(&mine, &at, pose, scratch, false, &mut CheckHints::default())
 }
 

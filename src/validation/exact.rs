@@ -252,36 +252,13 @@ fn penetrates_body_posed(
 /// A feather's triangles with their bounding boxes, for testing one
 /// feather against many with [`FeatherBoxes::intersects`].
 pub(crate) struct FeatherBoxes {
-    triangles: FeatherTriangles,
-    /// The triangles' boxes, side by side.
-    boxes: BoxLanes,
-    /// Each triangle's span along its own normal.
-    axes: [SeparatingAxis; MAX_TRIANGLES],
-    whole: Aabb,
-    /// The largest coordinate of any triangle (for the rounding allowance).
-    size: f32,
+    boxed: BoxedTriangles,
     plane: Option<FlatPlane>,
 }
 
 impl FeatherBoxes {
     pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
-        let mut boxes = BoxLanes::EMPTY;
-        let mut axes = [SeparatingAxis::NONE; MAX_TRIANGLES];
-        let mut whole = Aabb::of_triangle(&triangles[0]);
-        for (k, t) in triangles.iter().enumerate() {
-            let b = Aabb::of_triangle(t);
-            boxes.set(k, &b);
-            whole = whole.union(&b);
-            axes[k] = SeparatingAxis::of_triangle(t);
-        }
-        Self {
-            triangles: FeatherTriangles::from_slice(triangles),
-            boxes,
-            axes,
-            whole,
-            size: whole.min.abs().max(whole.max.abs()).max_element(),
-            plane: None,
-        }
+        Self { boxed: BoxedTriangles::new(triangles), plane: None }
     }
 
     /// The boxes of a flat part of a posed feather (one segment of a bent
@@ -313,7 +290,20 @@ impl FeatherBoxes {
         triangles: &[[Vec3; 3]],
     ) -> Self {
         let plane = FlatPlane::of_straight_feather(frame, shape, pose);
-        Self { plane, ..Self::new(triangles) }
+        Self { boxed: BoxedTriangles::new(triangles), plane }
+    }
+
+    /// [`FeatherBoxes::of_feather`] given the feather's triangles at `pose`
+    /// with their boxes made already.
+    pub(crate) fn of_boxed_feather(
+        frame: &RootFrame,
+        shape: &FeatherShape,
+        pose: FeatherPose,
+        boxed: &BoxedTriangles,
+    ) -> Self {
+        // A copy: read once, in order, it costs less than the scattered
+        // first touches of the obstacle boxes it comes from.
+        Self { boxed: *boxed, plane: FlatPlane::of_straight_feather(frame, shape, pose) }
     }
 
     /// [`penetrates_body_hinted`] for the feather and pose these boxes were
@@ -328,7 +318,7 @@ impl FeatherBoxes {
         scratch: &mut BodyScratch,
         hint: &mut Option<u32>,
     ) -> bool {
-        penetrates_body_posed(frame, shape, pose, (&self.triangles, self.plane), body, scratch, hint)
+        penetrates_body_posed(frame, shape, pose, (&self.boxed.triangles, self.plane), body, scratch, hint)
     }
 
     /// Whether these triangles intersect `b`'s (the exact test of
@@ -340,30 +330,29 @@ impl FeatherBoxes {
 
     /// The box of all its triangles.
     pub(crate) fn bounds(&self) -> &Aabb {
-        &self.whole
+        &self.boxed.whole
     }
 
     /// [`FeatherBoxes::intersects`] against triangles whose boxes are
     /// known: the same answer.
     pub(crate) fn intersects_boxed(&self, b: &BoxedTriangles) -> bool {
-        if !self.whole.overlaps(&b.whole) {
+        let mine = &self.boxed;
+        if !mine.whole.overlaps(&b.whole) {
             return false;
         }
         // Over b's triangles first: most miss this feather's box, or lie
         // beyond its plane, and are ruled out once instead of once per
         // triangle of this feather (the same pairs reach the exact test).
-        lanes(b.boxes.overlapping(&self.whole)).any(|j| {
+        lanes(b.boxes.overlapping(&mine.whole)).any(|j| {
             let (tb, box_b) = (&b.triangles[j], &b.boxes.get(j));
             if self.plane.is_some_and(|p| p.apart(tb)) {
                 return false;
             }
-            // The rounding allowance of b's projections (see SeparatingAxis).
-            let size_b = box_b.min.abs().max(box_b.max.abs()).max_element();
-            let (mut prepared_b, mut axis_b) = (None, None);
-            lanes(self.boxes.overlapping(box_b)).any(|k| {
-                let ta = &self.triangles[k];
-                !self.axes[k].separates_sized(tb, size_b)
-                    && !axis_b.get_or_insert_with(|| SeparatingAxis::of_triangle(tb)).separates_sized(ta, self.size)
+            let mut prepared_b = None;
+            lanes(mine.boxes.overlapping(box_b)).any(|k| {
+                let ta = &mine.triangles[k];
+                !mine.axes[k].separates_sized(tb, b.size)
+                    && !b.axes[j].separates_sized(ta, mine.size)
                     && prepared_intersect(&Prepared::of(ta), prepared_b.get_or_insert_with(|| Prepared::of(tb)))
             })
         })
@@ -562,19 +551,27 @@ pub(crate) struct BoxedTriangles {
     triangles: FeatherTriangles,
     /// The triangles' boxes side by side (a point's lane left empty).
     boxes: BoxLanes,
+    /// Each triangle's span along its own normal.
+    axes: [SeparatingAxis; MAX_TRIANGLES],
     whole: Aabb,
+    /// The largest coordinate of any triangle (the rounding allowance of
+    /// their projections on another's axis, see [`SeparatingAxis`]).
+    size: f32,
 }
 
 impl BoxedTriangles {
     pub(crate) fn new(triangles: &[[Vec3; 3]]) -> Self {
         let mut boxes = BoxLanes::EMPTY;
+        let mut axes = [SeparatingAxis::NONE; MAX_TRIANGLES];
         let mut whole = Aabb::of_triangle(&triangles[0]);
         for (k, t) in triangles.iter().enumerate() {
             let b = Aabb::of_triangle(t);
             boxes.set(k, &b);
             whole = whole.union(&b);
+            axes[k] = SeparatingAxis::of_triangle(t);
         }
-        Self { triangles: FeatherTriangles::from_slice(triangles), boxes, whole }
+        let size = whole.min.abs().max(whole.max.abs()).max_element();
+        Self { triangles: FeatherTriangles::from_slice(triangles), boxes, axes, whole, size }
     }
 
     /// The box of all its triangles.

@@ -409,7 +409,7 @@ pub(super) fn check_clear(
         !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
     } else {
         let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
-        posed_is_clear_boxed(frame, shape, (poses[i], &posed.triangles[i]), boxes, inputs.body, &mut worker.field)
+        posed_is_clear_boxed(frame, shape, (poses[i], &posed.boxes[i]), boxes, inputs.body, &mut worker.field)
     }
 }
 
