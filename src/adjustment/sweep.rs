@@ -49,6 +49,9 @@ const ANGLE_EPSILON: f32 = 1e-4;
 /// and still take the highest (the straight pose is clear there by the
 /// exact checks; the sweep's rounding differs).
 const ANGLE_TOLERANCE: f32 = 1e-3;
+/// Room left between a prism's bounding angle and the angle reached before
+/// the prism is passed over (radians; far above the rounding of either).
+const BOUND_MARGIN: f32 = 1e-5;
 /// Most vertices of a triangle cut by the lateral band.
 const CUT_VERTICES: usize = 5;
 
@@ -282,6 +285,27 @@ struct Sweep {
 }
 
 impl Sweep {
+    /// An angle (as [`sector_of_prism`] reports them) that no point of
+    /// `t`'s box in the (x, z) plane exceeds as seen from `joint`: the
+    /// box's corners' (the highest slope over a rectangle in front of the
+    /// joint is at a corner); `None` when a corner lies level with or
+    /// behind the joint.
+    fn angle_bound(&self, joint: Vec2, t: &SweptTriangle) -> Option<f32> {
+        let (ms, mc) = (self.mid_sin, self.mid_cos);
+        let mut most = f32::NEG_INFINITY;
+        for p in
+            [Vec2::new(t.lo.x, t.lo.z), Vec2::new(t.lo.x, t.hi.z), Vec2::new(t.hi.x, t.lo.z), Vec2::new(t.hi.x, t.hi.z)]
+        {
+            let d = p - joint;
+            let (along, up) = (mc * d.x + ms * d.y, mc * d.y - ms * d.x);
+            if along.is_nan() || along <= 0.0 {
+                return None;
+            }
+            most = most.max(up / along);
+        }
+        Some(most.atan() + self.mid)
+    }
+
     fn new(seg: &Segment, lo: f32, hi: f32) -> Self {
         let mid = 0.5 * (lo + hi);
         let (mid_sin, mid_cos) = mid.sin_cos();
@@ -394,6 +418,11 @@ fn lowest_clear_angle(swept: &[SweptTriangle], seg: &Segment, lo: f32, hi: f32) 
     let sweep = Sweep::new(seg, lo, hi);
     for t in swept {
         if t.hi.x < sweep.box_lo.x || t.lo.x > sweep.box_hi.x || t.hi.z < sweep.box_lo.y || t.lo.z > sweep.box_hi.y {
+            continue;
+        }
+        // Nothing of a prism whose box is seen from the joint no higher
+        // than the angle reached so far can raise it (or block).
+        if sweep.angle_bound(seg.joint, t).is_some_and(|a| a + ANGLE_EPSILON + BOUND_MARGIN < angle) {
             continue;
         }
         for &(r_in, r_out, half) in &seg.pieces {
