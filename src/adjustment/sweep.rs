@@ -286,16 +286,18 @@ struct Sweep {
 
 impl Sweep {
     /// An angle (as [`sector_of_prism`] reports them) that no point of
-    /// `t`'s box in the (x, z) plane exceeds as seen from `joint`: the
-    /// box's corners' (the highest slope over a rectangle in front of the
-    /// joint is at a corner); `None` when a corner lies level with or
-    /// behind the joint.
-    fn angle_bound(&self, joint: Vec2, t: &SweptTriangle) -> Option<f32> {
+    /// `t`'s box in the (x, z) plane within `reach` of `joint` exceeds as
+    /// seen from it: the corners' of the box cut to the square round that
+    /// disc (the highest slope over a rectangle in front of the joint is at
+    /// a corner); `None` when a corner lies level with or behind the joint.
+    fn angle_bound(&self, joint: Vec2, reach: f32, t: &SweptTriangle) -> Option<f32> {
         let (ms, mc) = (self.mid_sin, self.mid_cos);
         let mut most = f32::NEG_INFINITY;
-        for p in
-            [Vec2::new(t.lo.x, t.lo.z), Vec2::new(t.lo.x, t.hi.z), Vec2::new(t.hi.x, t.lo.z), Vec2::new(t.hi.x, t.hi.z)]
-        {
+        // Only points within `reach` of the joint count (see
+        // [`sector_of_prism`]): the box cut to the square round that disc.
+        let r = Vec2::splat(reach);
+        let (lo, hi) = (Vec2::new(t.lo.x, t.lo.z).max(joint - r), Vec2::new(t.hi.x, t.hi.z).min(joint + r));
+        for p in [lo, Vec2::new(lo.x, hi.y), Vec2::new(hi.x, lo.y), hi] {
             let d = p - joint;
             let (along, up) = (mc * d.x + ms * d.y, mc * d.y - ms * d.x);
             if along.is_nan() || along <= 0.0 {
@@ -422,7 +424,7 @@ fn lowest_clear_angle(swept: &[SweptTriangle], seg: &Segment, lo: f32, hi: f32) 
         }
         // Nothing of a prism whose box is seen from the joint no higher
         // than the angle reached so far can raise it (or block).
-        if sweep.angle_bound(seg.joint, t).is_some_and(|a| a + ANGLE_EPSILON + BOUND_MARGIN < angle) {
+        if sweep.angle_bound(seg.joint, seg.length, t).is_some_and(|a| a + ANGLE_EPSILON + BOUND_MARGIN < angle) {
             continue;
         }
         for &(r_in, r_out, half) in &seg.pieces {
