@@ -416,6 +416,12 @@ fn prism_holds(lower: &[Vec2], raise: Vec2, j: Vec2) -> bool {
 /// The lowest angle in `[lo, hi]` at which the segment clears the obstacle
 /// prisms and the skin; `None` when it is blocked.
 fn lowest_clear_angle(swept: &[SweptTriangle], seg: &Segment, lo: f32, hi: f32) -> Option<f32> {
+    lowest_clear_angle_pruned(swept, seg, (lo, hi), true)
+}
+
+/// [`lowest_clear_angle`], passing over the prisms its bounding angle
+/// rules out when `prune` (the same answer either way).
+fn lowest_clear_angle_pruned(swept: &[SweptTriangle], seg: &Segment, (lo, hi): (f32, f32), prune: bool) -> Option<f32> {
     let mut angle = lo;
     let sweep = Sweep::new(seg, lo, hi);
     for t in swept {
@@ -424,7 +430,9 @@ fn lowest_clear_angle(swept: &[SweptTriangle], seg: &Segment, lo: f32, hi: f32) 
         }
         // Nothing of a prism whose box is seen from the joint no higher
         // than the angle reached so far can raise it (or block).
-        if sweep.angle_bound(seg.joint, seg.length, t).is_some_and(|a| a + ANGLE_EPSILON + BOUND_MARGIN < angle) {
+        if prune
+            && sweep.angle_bound(seg.joint, seg.length, t).is_some_and(|a| a + ANGLE_EPSILON + BOUND_MARGIN < angle)
+        {
             continue;
         }
         for &(r_in, r_out, half) in &seg.pieces {

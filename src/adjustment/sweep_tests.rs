@@ -128,3 +128,44 @@ fn on_a_stack_of_feathers_the_tip_lies_on_the_top_one() {
     println!("stack: tip {:.2} thicknesses above the stack", height / s.thickness);
     assert!(height < 3.0 * s.thickness, "tip {:.4} thicknesses above the stack", height / s.thickness);
 }
+
+#[test]
+fn passing_prisms_over_by_their_bounding_angle_changes_no_answer() {
+    // Random obstacle and skin triangles round segments at random joints
+    // and sweeps: the lowest clear angle (or a block) is the same with the
+    // prisms ruled out by their boxes passed over and with every one cut.
+    let mut seed = 0x9e37_79b9_u32;
+    let mut unit = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    };
+    let (mut differ, mut raised, mut blocked) = (0, 0, 0);
+    for _ in 0..400 {
+        let joint = Vec2::new(unit() * 0.6, unit() * 0.2);
+        let seg = Segment {
+            joint,
+            length: 0.3,
+            skin_from: 0.0,
+            pieces: [(0.0, 0.1, 0.05), (0.1, 0.2, 0.08), (0.2, 0.3, 0.06)],
+        };
+        let lo = -0.6 + 0.4 * unit();
+        let hi = lo + 0.2 + 0.8 * unit();
+        let mut swept = Vec::new();
+        for _ in 0..40 {
+            let c = Vec3::new(joint.x - 0.2 + 0.7 * unit(), 0.3 * (unit() - 0.5), joint.y - 0.3 + 0.5 * unit());
+            let t = [0, 1, 2].map(|_| c + 0.15 * Vec3::new(unit() - 0.5, unit() - 0.5, 0.4 * (unit() - 0.5)));
+            let skin = unit() < 0.3;
+            push_swept(&mut swept, &[t], if skin { 0.0 } else { 0.01 }, skin, |p| p);
+        }
+        let pruned = lowest_clear_angle_pruned(&swept, &seg, (lo, hi), true);
+        let every = lowest_clear_angle_pruned(&swept, &seg, (lo, hi), false);
+        differ += usize::from(pruned.map(f32::to_bits) != every.map(f32::to_bits));
+        raised += usize::from(every.is_some_and(|a| a > lo));
+        blocked += usize::from(every.is_none());
+    }
+    assert_eq!(differ, 0);
+    // Both outcomes occur, and raised angles do.
+    assert!(raised > 40 && blocked > 40, "raised {raised}, blocked {blocked}");
+}
