@@ -52,6 +52,13 @@ const ANGLE_TOLERANCE: f32 = 1e-3;
 /// Room left between a prism's bounding angle and the angle reached before
 /// the prism is passed over (radians; far above the rounding of either).
 const BOUND_MARGIN: f32 = 1e-5;
+/// How far a prism's box is widened for its bounding angle, relative to the
+/// reach and the joint's coordinates (far above the rounding of the points
+/// a cut interpolates).
+const BOUND_PAD: f32 = 1e-5;
+/// A prism whose box comes within this share of the reach of the joint is
+/// never passed over: seen from so near, a rounding error is a large angle.
+const BOUND_NEAR: f32 = 1e-2;
 /// Most vertices of a triangle cut by the lateral band.
 const CUT_VERTICES: usize = 5;
 
@@ -289,14 +296,24 @@ impl Sweep {
     /// `t`'s box in the (x, z) plane within `reach` of `joint` exceeds as
     /// seen from it: the corners' of the box cut to the square round that
     /// disc (the highest slope over a rectangle in front of the joint is at
-    /// a corner); `None` when a corner lies level with or behind the joint.
+    /// a corner); `None` when a corner lies level with or behind the joint,
+    /// when the box comes near the joint (where the rounding of the points
+    /// [`sector_of_prism`] interpolates turns into large angles), or when
+    /// it is not finite.
     fn angle_bound(&self, joint: Vec2, reach: f32, t: &SweptTriangle) -> Option<f32> {
         let (ms, mc) = (self.mid_sin, self.mid_cos);
         let mut most = f32::NEG_INFINITY;
         // Only points within `reach` of the joint count (see
-        // [`sector_of_prism`]): the box cut to the square round that disc.
+        // [`sector_of_prism`]): the box cut to the square round that disc,
+        // widened far beyond the rounding of the points cut from it.
         let r = Vec2::splat(reach);
+        let pad = Vec2::splat(BOUND_PAD * (reach + joint.abs().max_element()));
         let (lo, hi) = (Vec2::new(t.lo.x, t.lo.z).max(joint - r), Vec2::new(t.hi.x, t.hi.z).min(joint + r));
+        let (lo, hi) = (lo - pad, hi + pad);
+        let gap = (lo - joint).max(joint - hi).max(Vec2::ZERO);
+        if !(lo.is_finite() && hi.is_finite()) || gap.length() < BOUND_NEAR * reach {
+            return None;
+        }
         for p in [lo, Vec2::new(lo.x, hi.y), Vec2::new(hi.x, lo.y), hi] {
             let d = p - joint;
             let (along, up) = (mc * d.x + ms * d.y, mc * d.y - ms * d.x);

@@ -157,9 +157,17 @@ fn penetrates_body_exhaustive(frame: &RootFrame, shape: &FeatherShape, pose: Fea
     }
     let part = feather_beyond_root(frame, shape, pose);
     let faces = 0..body.triangle_count() as u32;
+    // Faces far from a part triangle (boxes apart by more than a hundredth
+    // of their diagonals, ten thousand times the exact test's tolerance)
+    // are not tested: a looser rule than the checker's own.
     let crosses = part.iter().any(|t| {
         let bounds = Aabb::of_triangle(t);
-        faces.clone().any(|f| body.bounds(f).overlaps(&bounds) && triangles_intersect(t, &body.corners(f)))
+        faces.clone().any(|f| {
+            let face = body.bounds(f);
+            let widen = Vec3::splat(0.01 * ((bounds.max - bounds.min).length() + (face.max - face.min).length()));
+            Aabb { min: face.min - widen, max: face.max + widen }.overlaps(&bounds)
+                && triangles_intersect(t, &body.corners(f))
+        })
     });
     crosses || part.iter().any(|t| t.iter().find_map(|&p| side_of_skin_exhaustive(body, p, shape.length)) == Some(true))
 }

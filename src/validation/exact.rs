@@ -180,13 +180,22 @@ fn penetrates_body_posed(
         part_boxes.set(k, &Aabb::of_triangle(t));
     }
     let unboxed = part.get(PART_LANES..).unwrap_or_default();
+    let (part_diag, part_size) =
+        ((bounds.max - bounds.min).length(), bounds.min.abs().max(bounds.max.abs()).max_element());
     // Every part of a straight feather lies in its plane: a body triangle
     // wholly on one side of it crosses none of them. Nor does a part lying
     // wholly on one side of the body triangle (along its face normal).
     let margin = posed_margin(frame, shape, pose);
     let crossing = |t: u32| {
-        // Only part triangles whose box meets the face's.
-        let near = part_boxes.overlapping(&body.bounds(t));
+        // Only part triangles whose box comes within the exact test's
+        // contact tolerance of the face's (1e-6 of the pair's box diagonal,
+        // which is at most the two diagonals together), widened past the
+        // rounding of the comparison: the exact test rejects the others
+        // by their boxes.
+        let face = body.bounds(t);
+        let size = part_size.max(face.min.abs().max(face.max.abs()).max_element());
+        let widen = Vec3::splat(2e-6 * (part_diag + (face.max - face.min).length()) + 1e-6 * size);
+        let near = part_boxes.overlapping(&Aabb { min: face.min - widen, max: face.max + widen });
         if near == 0 && unboxed.is_empty() {
             return false;
         }
@@ -666,6 +675,41 @@ crate::memory::heap_size_of_fields!(BodyScratch { part, ids, distances });
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_part_resting_within_the_contact_tolerance_on_the_skin_is_tested_against_it() {
+        // A top face (z = 0, x in [0, 1]) and a side face going down at
+        // x = 1. Part triangle X lies flat 1e-8 above the top: within the
+        // exact test's tolerance it is coplanar with it and overlaps it
+        // (an intersection), though their boxes do not meet. Triangle Y
+        // hangs below beyond the edge. The box filter in front of the
+        // exact test must not drop X.
+        let body = BodyIndex::from_mesh(
+            &[
+                Vec3::new(0.0, -1.0, 0.0),
+                Vec3::new(1.0, -1.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, -1.0, -1.0),
+                Vec3::new(1.0, 1.0, -1.0),
+            ],
+            &[[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]],
+        );
+        let frame = RootFrame::from_normal_and_direction(Vec3::ZERO, Vec3::Z, Vec3::X).unwrap();
+        let shape = FeatherShape::for_spacing(1.0);
+        let x = [Vec3::new(0.2, -0.2, 1e-8), Vec3::new(0.8, -0.2, 1e-8), Vec3::new(0.5, 0.2, 1e-8)];
+        let y = [Vec3::new(1.2, 0.0, -0.5), Vec3::new(1.5, 0.1, -0.5), Vec3::new(1.3, -0.1, -0.6)];
+        assert!(crate::intersect::triangles_intersect(&x, &body.corners(0)), "X meets the top by the exact test");
+        let mut scratch = BodyScratch::default();
+        let penetrates = |tris: &[[Vec3; 3]], scratch: &mut BodyScratch| {
+            penetrates_body_posed(&frame, &shape, FeatherPose::default(), (tris, None), &body, scratch, &mut None)
+        };
+        assert!(penetrates(&[x, y], &mut scratch));
+        // Lifted clear of the tolerance, X no longer counts.
+        let lifted = x.map(|p| p + Vec3::Z * 0.01);
+        assert!(!crate::intersect::triangles_intersect(&lifted, &body.corners(0)));
+        assert!(!penetrates(&[lifted], &mut scratch));
+    }
 
     #[test]
     fn clipping_keeps_the_far_part() {
