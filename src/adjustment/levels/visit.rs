@@ -150,6 +150,16 @@ pub(super) struct PosedGeometry<'a> {
     pub(super) bounds: &'a [ObstacleBounds],
 }
 
+impl<'a> PosedGeometry<'a> {
+    /// The obstacle boxes of the feathers `ids` (one feather's obstacles).
+    pub(super) fn boxes_of<'b>(&self, ids: &'b [u32]) -> BoxesOf<'b>
+    where
+        'a: 'b,
+    {
+        BoxesOf { ids: Some(ids), all: self.boxes, bounds: self.bounds }
+    }
+}
+
 /// Levels with fewer feathers than this are visited on the calling thread.
 const PARALLEL_LEVEL_MIN: usize = 4;
 
@@ -277,7 +287,7 @@ pub(super) fn adjust_one(
             far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
         }
     }));
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
+    let boxes = posed.boxes_of(&worker.obstacle_ids);
     let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
     let solved = adjust_feather_boxed(&at, poses[i], &worker.obstacles, inputs.params, inputs.steps, &mut worker.field);
     if inputs.settle_rate <= 0.0 || solved.pose == poses[i] {
@@ -329,7 +339,7 @@ fn lowered(
     posed: PosedGeometry<'_>,
     worker: &mut Worker,
 ) -> Option<Visit> {
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
+    let boxes = posed.boxes_of(&worker.obstacle_ids);
     let (frame, shape, params) = (&inputs.frames[i], &inputs.shapes[i], inputs.params);
     let feather = SettlingFeather { frame, shape, params, body: inputs.body, rate: inputs.settle_rate };
     let step = lowered_pose(feather, pose, boxes, &mut worker.field)?;
@@ -365,7 +375,7 @@ fn repaired(
     if inputs.settle_rate <= 0.0 || inputs.shapes[i].segment_count() < 2 {
         return None;
     }
-    let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
+    let boxes = posed.boxes_of(&worker.obstacle_ids);
     let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
     repair_drape(&at, pose, inputs.params, &mut worker.field)
         .filter(|p| p.pitch <= inputs.params.max_pitch && pose_change(&pose, p) <= REPAIR_MOST)
@@ -408,7 +418,7 @@ pub(super) fn check_clear(
         let mine = FeatherBoxes::new(&mine);
         !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
     } else {
-        let boxes = BoxesOf { ids: Some(&worker.obstacle_ids), all: posed.boxes, bounds: posed.bounds };
+        let boxes = posed.boxes_of(&worker.obstacle_ids);
         posed_is_clear_boxed(frame, shape, (poses[i], &posed.boxes[i]), boxes, inputs.body, &mut worker.field)
     }
 }
