@@ -123,6 +123,20 @@ pub(crate) fn posed_is_clear_boxed(
     boxes_clear(&mine, &at, pose, scratch, false, &mut CheckHints::default())
 }
 
+/// The obstacle tests of [`posed_is_clear_boxed`] alone: whether the
+/// feather at `pose` (its own [`ObstacleBoxes`] `own`) meets none of
+/// `boxes`. With the body test of a check that passed before, on the same
+/// pose and body, it answers that check for a changed set of obstacles.
+pub(crate) fn posed_meets_none_boxed(
+    frame: &RootFrame,
+    shape: &FeatherShape,
+    (pose, own): (FeatherPose, &ObstacleBoxes),
+    boxes: BoxesOf<'_>,
+) -> bool {
+    let mine = FeatherBoxes::of_boxed_feather(frame, shape, pose, &own.triangles);
+    !meets_obstacle(&mine, boxes, false, &mut None)
+}
+
 /// What made the last exact checks of one feather fail: the obstacle and
 /// body triangle tested first by the next check (poses a little apart
 /// mostly fail on the same one). Only the order of the tests depends on

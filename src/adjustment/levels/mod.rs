@@ -177,6 +177,7 @@ impl Adjuster {
         self.workers.iter_mut().for_each(|w| {
             w.obstacles.reserve(longest.saturating_sub(w.obstacles.len()));
             w.obstacle_ids.reserve(longest.saturating_sub(w.obstacle_ids.len()));
+            w.changed_ids.reserve(longest.saturating_sub(w.changed_ids.len()));
         });
     }
 
@@ -431,6 +432,7 @@ impl Adjuster {
                 field: HeightField::new(params.height_field_u, params.height_field_v),
                 obstacles: Vec::new(),
                 obstacle_ids: Vec::new(),
+                changed_ids: Vec::new(),
             });
         }
     }

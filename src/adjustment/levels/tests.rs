@@ -198,9 +198,10 @@ fn tips_first(frames: &[RootFrame]) -> (Vec<u32>, Vec<u32>) {
 }
 
 /// A sparse run gives the poses, adjusted and verified flags of a run
-/// by levels over the same symmetric candidates; by levels, the checks
-/// made ahead on several threads change nothing either, nor does a
-/// verifying run's walk along the order.
+/// by levels over the same symmetric candidates (which checks nothing
+/// ahead): by levels, the checks made ahead, and those redone only against
+/// the obstacles changed since, change nothing, on one thread or several,
+/// nor does a verifying run's walk along the order.
 #[test]
 fn a_sparse_run_matches_the_levels() {
     let mut rng = Rng::new(7);
@@ -287,8 +288,8 @@ fn a_sparse_run_matches_the_levels() {
                 }
             }
             for pairs_only in [false, true] {
-                // By levels on three threads, which checks the suspects
-                // ahead (Adjuster::precheck), and on one, which does not.
+                // By levels (which checks the suspects ahead,
+                // Adjuster::precheck) on three threads and on one.
                 let by_levels = threads[1].install(|| run(false, pairs_only));
                 assert_eq!(by_levels, threads[0].install(|| run(false, pairs_only)), "round {round}");
                 let sparse = run(true, pairs_only);

@@ -2,7 +2,7 @@
 //! or adjusted (and settled); what every feather of a level reads, and the
 //! parallel run of one level.
 
-use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, posed_is_clear_boxed};
+use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, posed_is_clear_boxed, posed_meets_none_boxed};
 use super::super::drape::repair_drape;
 use super::super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
@@ -82,12 +82,15 @@ pub(super) struct Worker {
     pub(super) obstacles: Vec<ObstacleFeather>,
     /// The feather index of each obstacle.
     pub(super) obstacle_ids: Vec<u32>,
+    /// Those of `obstacle_ids` that changed pose earlier in the run.
+    pub(super) changed_ids: Vec<u32>,
 }
 
 /// The answer of an exact check made ahead of the ordered pass. It stands
 /// for the check the ordered pass would make as long as no obstacle of the
 /// feather changed pose before its turn (the check reads only the
-/// feather's own pose, its obstacles' poses and the body).
+/// feather's own pose, its obstacles' poses and the body); a clear one is
+/// then redone against the obstacles that changed alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(super) enum Precheck {
     /// Not checked ahead.
@@ -239,18 +242,21 @@ pub(super) fn adjust_one(
         verify = true;
     }
     // A check made ahead stands when no obstacle changed since.
-    let ahead = marks.prechecked.get(i).copied().unwrap_or_default();
-    let ahead = if verify && ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]) {
-        if ahead == Precheck::Clear {
-            return Visit::Verified;
-        }
-        Some(false)
-    } else {
-        None
-    };
+    let ahead = if verify { marks.prechecked.get(i).copied().unwrap_or_default() } else { Precheck::None };
+    let stands = ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]);
+    if stands && ahead == Precheck::Clear {
+        return Visit::Verified;
+    }
     // The ids first: a check needs only them (and the prepared boxes);
     // the triangles are copied out only for a feather that is adjusted.
     collect_obstacle_ids(inputs, i, posed, worker);
+    let ahead = match ahead {
+        Precheck::Blocked if stands => Some(false),
+        // Clear ahead, with the same pose and body: only the obstacles
+        // changed since can have made it fail.
+        Precheck::Clear => Some(changed_obstacles_clear(inputs, i, poses, posed, marks, worker)),
+        _ => None,
+    };
     // A bent feather of an incremental verifying run is kept where it lies,
     // lowered, or repaired: solved afresh only when repair fails.
     let local = kept_locally(inputs, i, poses[i]);
@@ -402,6 +408,30 @@ pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: PosedGe
     );
 }
 
+/// Whether feather `i` at its current pose is clear of those of its
+/// obstacles (`worker.obstacle_ids`) that changed pose earlier in the run:
+/// the part of [`check_clear`] that can answer differently from a check
+/// made ahead of the run that passed.
+fn changed_obstacles_clear(
+    inputs: &Inputs<'_>,
+    i: usize,
+    poses: &[FeatherPose],
+    posed: PosedGeometry<'_>,
+    marks: Marks<'_>,
+    worker: &mut Worker,
+) -> bool {
+    let Worker { obstacle_ids, changed_ids, .. } = worker;
+    changed_ids.clear();
+    changed_ids.extend(obstacle_ids.iter().copied().filter(|&j| marks.changed[j as usize]));
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    if inputs.pairs_only {
+        let mine = FeatherBoxes::new(&feather_triangles(frame, shape, poses[i]));
+        !changed_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
+    } else {
+        posed_meets_none_boxed(frame, shape, (poses[i], &posed.boxes[i]), posed.boxes_of(changed_ids))
+    }
+}
+
 /// The exact check of feather `i` at its current pose against the
 /// obstacles in `worker.obstacle_ids` (and the body, unless the run tests
 /// the pairs only).
@@ -423,7 +453,7 @@ pub(super) fn check_clear(
     }
 }
 
-crate::memory::heap_size_of_fields!(Worker { field, obstacles, obstacle_ids });
+crate::memory::heap_size_of_fields!(Worker { field, obstacles, obstacle_ids, changed_ids });
 impl crate::memory::HeapSize for Vec<Worker> {
     fn heap_bytes(&self) -> usize {
         crate::memory::nested_heap_bytes(self)
