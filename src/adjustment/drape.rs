@@ -9,7 +9,7 @@ use super::height_field::SOCKET_FRACTION;
 use super::sweep::{fill_swept_triangles, swept_drape};
 use super::{AdjustParams, DrapeRoute, HeightField, ObstacleFeather};
 
-use crate::feather::{FeatherPose, segment_triangles};
+use crate::feather::{FeatherPose, pose_change, segment_triangles};
 use crate::validation::FeatherBoxes;
 
 /// Angle steps (radians) of the descent of a segment in [`descent_drape`]; the
@@ -167,7 +167,10 @@ const REPAIR_ASCENT_STEPS: usize = 8;
 /// angle if it is clear there by the exact checks (with the earlier
 /// segments as repaired), else rises to the lowest clear angle above it
 /// (see [`ascend`]); the roll is kept. `None` when a segment is blocked
-/// even at its highest angle, or the whole feather fails its exact check.
+/// even at its highest angle, or the whole feather fails its exact check,
+/// or once the repair must change some angle by more than `most` (radians,
+/// see [`pose_change`]; every angle's change only grows as the repair goes
+/// on, so such a repair would end further away still).
 /// Solving a drape afresh from the straight pose ([`drape`]) finds a clear
 /// pose too, but from another start: its bends may differ from the last
 /// frame's by tens of degrees (a feather that pops while every pose is
@@ -175,6 +178,7 @@ const REPAIR_ASCENT_STEPS: usize = 8;
 pub(crate) fn repair_drape(
     at: &FeatherInPlace<'_>,
     start: FeatherPose,
+    most: f32,
     params: &AdjustParams,
     scratch: &mut HeightField,
 ) -> Option<FeatherPose> {
@@ -194,6 +198,9 @@ pub(crate) fn repair_drape(
         let (low, high) = range(k);
         let from = angle(&pose, k).clamp(low, high);
         set(&mut pose, k, from);
+        if pose_change(&start, &pose) > most {
+            return None;
+        }
         if segment_check(at, pose, k, scratch, &mut hints) {
             continue;
         }
@@ -213,8 +220,8 @@ pub(crate) fn repair_drape(
             let trial = raised(d);
             (0..=k).all(|j| segment_check(at, trial, j, scratch, &mut hints))
         };
-        let most = (0..=k).map(|j| range(j).1 - angle(&base, j)).fold(0.0f32, f32::max);
-        let d = ascend(0.0, most, &mut clear)?;
+        let highest = (0..=k).map(|j| range(j).1 - angle(&base, j)).fold(0.0f32, f32::max);
+        let d = ascend(0.0, highest, &mut clear, |d| pose_change(&start, &raised(d)) > most)?;
         pose = raised(d);
     }
     exact_check(at, pose, scratch, true, &mut hints).then_some(pose)
@@ -223,8 +230,10 @@ pub(crate) fn repair_drape(
 /// The lowest angle above `from` (which is not clear) up to `high` at
 /// which `clear` holds: [`REPAIR_ASCENT_STEPS`] steps of [`REPAIR_STEP`],
 /// the first clear one narrowed by halving; past them, the rest of the way
-/// up to `high` bisected. `None` when `high` is not clear.
-fn ascend(from: f32, high: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f32> {
+/// up to `high` bisected. `None` when `high` is not clear, or once an
+/// angle that failed is `too_far` (which must hold of every angle above
+/// one where it holds): the angle found would lie above it.
+fn ascend(from: f32, high: f32, mut clear: impl FnMut(f32) -> bool, too_far: impl Fn(f32) -> bool) -> Option<f32> {
     let mut failed = from;
     for s in 1..=REPAIR_ASCENT_STEPS {
         let a = (from + s as f32 * REPAIR_STEP).min(high);
@@ -235,6 +244,9 @@ fn ascend(from: f32, high: f32, mut clear: impl FnMut(f32) -> bool) -> Option<f3
             return Some(narrow(failed, a, DRAPE_BISECTIONS, &mut clear));
         }
         failed = a;
+        if too_far(failed) {
+            return None;
+        }
     }
     if failed >= high || !clear(high) {
         return None;

@@ -105,8 +105,14 @@ pub(super) fn settled_pose(
         .chain(faster)
         .find(|&pose| clear(pose, field))
         .or_else(|| {
-            repair_drape(&FeatherInPlace { frame, shape, obstacles: boxes, body }, current, params, field)
-                .filter(|p| p.pitch <= params.max_pitch)
+            repair_drape(
+                &FeatherInPlace { frame, shape, obstacles: boxes, body },
+                current,
+                f32::INFINITY,
+                params,
+                field,
+            )
+            .filter(|p| p.pitch <= params.max_pitch)
         })
         .or_else(|| large.clone().find(|&pose| clear(pose, field)))
         .unwrap_or(solved)

@@ -169,3 +169,75 @@ fn passing_prisms_over_by_their_bounding_angle_changes_no_answer() {
     // Both outcomes occur, and raised angles do.
     assert!(raised > 40 && blocked > 40, "raised {raised}, blocked {blocked}");
 }
+
+#[test]
+fn a_repair_given_up_past_its_largest_change_finds_every_small_repair() {
+    // The top feather of a stack pushed down into the one beneath it by
+    // random amounts: a repair that gives up once an angle must change by
+    // more than `most` finds exactly the repairs within `most` that an
+    // unbounded one finds.
+    use super::super::checks::{BoxesOf, FeatherInPlace};
+    use super::super::drape::repair_drape;
+    use super::super::obstacle::{ObstacleBounds, ObstacleBoxes};
+    use crate::feather::pose_change;
+    let (s, params) = (shape(), AdjustParams::default());
+    let body = quads(&[flat(-10.0, 10.0, 0.0)]);
+    let mut field = HeightField::new(params.height_field_u, params.height_field_v);
+    let mut obstacles = Vec::new();
+    for k in (1..=3).rev() {
+        let frame = root_at(k as f32 * 0.25 * s.length, 0.0);
+        let pose = adjust_feather(
+            &frame,
+            &s,
+            FeatherPose::default(),
+            &obstacles,
+            &body,
+            &params,
+            AdjustSteps::Full,
+            &mut field,
+        )
+        .pose;
+        obstacles.push(ObstacleFeather {
+            triangles: feather_triangles(&frame, &s, pose),
+            thickness: s.thickness,
+            far_side: false,
+        });
+    }
+    let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
+    let bounds: Vec<ObstacleBounds> = boxes.iter().map(ObstacleBoxes::bounds).collect();
+    let frame = root_at(0.0, 0.0);
+    let at = FeatherInPlace {
+        frame: &frame,
+        shape: &s,
+        obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds },
+        body: &body,
+    };
+    let rest =
+        adjust_feather(&frame, &s, FeatherPose::default(), &obstacles, &body, &params, AdjustSteps::Full, &mut field)
+            .pose;
+    let mut seed = 0x2545_f491_u32;
+    let mut unit = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    };
+    let (mut within, mut beyond) = (0, 0);
+    for _ in 0..200 {
+        let mut start = rest;
+        start.pitch -= 0.12 * unit();
+        for b in start.bends.iter_mut().take(3) {
+            *b -= 0.12 * unit() - 0.03;
+        }
+        let most = 0.01 + 0.05 * unit();
+        let unbounded = repair_drape(&at, start, f32::INFINITY, &params, &mut field);
+        let small = unbounded.filter(|p| pose_change(&start, p) <= most);
+        let bounded = repair_drape(&at, start, most, &params, &mut field).filter(|p| pose_change(&start, p) <= most);
+        assert_eq!(bounded, small, "{start:?} within {most}");
+        within += usize::from(small.is_some_and(|p| p != start));
+        beyond += usize::from(unbounded.is_some() && small.is_none());
+    }
+    // Both kinds occur: repairs that move the feather within the bound,
+    // and repairs beyond it.
+    assert!(within > 20 && beyond > 20, "within {within}, beyond {beyond}");
+}

@@ -383,7 +383,7 @@ fn repaired(
     }
     let boxes = posed.boxes_of(&worker.obstacle_ids);
     let at = FeatherInPlace { frame: &inputs.frames[i], shape: &inputs.shapes[i], obstacles: boxes, body: inputs.body };
-    repair_drape(&at, pose, inputs.params, &mut worker.field)
+    repair_drape(&at, pose, REPAIR_MOST, inputs.params, &mut worker.field)
         .filter(|p| p.pitch <= inputs.params.max_pitch && pose_change(&pose, p) <= REPAIR_MOST)
 }
 
