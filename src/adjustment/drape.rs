@@ -218,7 +218,9 @@ pub(crate) fn repair_drape(
         };
         let mut clear = |d: f32| {
             let trial = raised(d);
-            (0..=k).all(|j| segment_check(at, trial, j, scratch, &mut hints))
+            // Segment k first: it is the one that met something, and most
+            // raises that fail, fail there.
+            (0..=k).rev().all(|j| segment_check(at, trial, j, scratch, &mut hints))
         };
         let highest = (0..=k).map(|j| range(j).1 - angle(&base, j)).fold(0.0f32, f32::max);
         let d = ascend(0.0, highest, &mut clear, |d| pose_change(&start, &raised(d)) > most)?;
