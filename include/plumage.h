@@ -1242,9 +1242,11 @@ typedef struct PlumageFeatherGeometry {
  * a negative one towards the skin. A template vertex (x, y, 0) carried by
  * segment k (`PlumageFeatherTemplate.vertex_segments`) lands at
  *
- *     p = sum over j < k of (L/S)(cos a_j, 0, sin a_j)
- *         + (x - k/S) L (cos a_k, 0, sin a_k) + (0, y W, 0)
- *     world = root + rotate(q, p)
+ * ```text
+ * p = sum over j < k of (L/S)(cos a_j, 0, sin a_j)
+ *     + (x - k/S) L (cos a_k, 0, sin a_k) + (0, y W, 0)
+ * world = root + rotate(q, p)
+ * ```
  *
  * with L = `length`, W = `width`; `shaders/feather_instance.vert` does
  * this on the GPU. The result matches `plumage_system_feather_geometry`'s
