@@ -91,7 +91,14 @@ pub(crate) fn pose_is_clear(
 ) -> bool {
     let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
     let bounds: Vec<ObstacleBounds> = boxes.iter().map(ObstacleBoxes::bounds).collect();
-    pose_is_clear_boxed(frame, shape, pose, BoxesOf { ids: None, all: &boxes, bounds: &bounds }, body, scratch)
+    pose_is_clear_boxed(
+        frame,
+        shape,
+        pose,
+        BoxesOf { ids: None, all: &boxes, bounds: &bounds, aside: None },
+        body,
+        scratch,
+    )
 }
 
 /// `pose_is_clear` with the obstacles' [`ObstacleBoxes`] made already.
@@ -150,12 +157,30 @@ pub(super) struct CheckHints {
 
 /// The [`ObstacleBoxes`] of one feather's obstacles: obstacle k's are
 /// `all[ids[k]]`, or `all[k]` without `ids`; `bounds` holds the
-/// [`ObstacleBounds`] of `all`, in its order.
+/// [`ObstacleBounds`] of `all`, in its order. Where `aside` gives an index
+/// an entry, that entry's boxes replace `all`'s.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxesOf<'a> {
     pub(crate) ids: Option<&'a [u32]>,
     pub(crate) all: &'a [ObstacleBoxes],
     pub(crate) bounds: &'a [ObstacleBounds],
+    pub(crate) aside: Option<SetAside<'a>>,
+}
+
+/// Boxes set aside for some indices of a [`BoxesOf`]: index `f`'s are
+/// `boxes[slot[f]]` unless `slot[f]` is `u32::MAX`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SetAside<'a> {
+    pub(crate) slot: &'a [u32],
+    pub(crate) boxes: &'a [ObstacleBoxes],
+    pub(crate) bounds: &'a [ObstacleBounds],
+}
+
+impl SetAside<'_> {
+    #[inline]
+    fn entry_of(&self, f: usize) -> Option<usize> {
+        self.slot.get(f).copied().filter(|&s| s != u32::MAX).map(|s| s as usize)
+    }
 }
 
 impl<'a> BoxesOf<'a> {
@@ -191,13 +216,21 @@ impl<'a> BoxesOf<'a> {
     }
 
     #[inline]
-    fn get(&self, k: usize) -> &ObstacleBoxes {
-        &self.all[self.index(k)]
+    fn get(&self, k: usize) -> &'a ObstacleBoxes {
+        let f = self.index(k);
+        match self.aside.and_then(|a| a.entry_of(f).map(|s| (a, s))) {
+            Some((a, s)) => &a.boxes[s],
+            None => &self.all[f],
+        }
     }
 
     #[inline]
     fn bounds_of(&self, k: usize) -> ObstacleBounds {
-        self.bounds[self.index(k)]
+        let f = self.index(k);
+        match self.aside.and_then(|a| a.entry_of(f).map(|s| (a, s))) {
+            Some((a, s)) => a.bounds[s],
+            None => self.bounds[f],
+        }
     }
 
     #[inline]

@@ -59,7 +59,12 @@ pub fn adjust_feather(
     boxes.extend(obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)));
     bounds.clear();
     bounds.extend(boxes.iter().map(ObstacleBoxes::bounds));
-    let at = FeatherInPlace { frame, shape, obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds }, body };
+    let at = FeatherInPlace {
+        frame,
+        shape,
+        obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds, aside: None },
+        body,
+    };
     let outcome = adjust_feather_boxed(&at, previous, obstacles, params, steps, scratch);
     (scratch.boxes, scratch.bounds) = (boxes, bounds);
     outcome

@@ -209,7 +209,7 @@ fn a_repair_given_up_past_its_largest_change_finds_every_small_repair() {
     let at = FeatherInPlace {
         frame: &frame,
         shape: &s,
-        obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds },
+        obstacles: BoxesOf { ids: None, all: &boxes, bounds: &bounds, aside: None },
         body: &body,
     };
     let rest =

@@ -31,9 +31,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
-    triangles, spheres, boxes, bounds, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, precheck_outcomes, dependents
-} plain { #[cfg(test)] walk_share, #[cfg(test)] pairs_only });
+    triangles, spheres, boxes, bounds, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, dependents, aside
+} plain { #[cfg(test)] by_levels, #[cfg(test)] checks_ahead_first, #[cfg(test)] pairs_only });
 
+mod aside;
 mod scope;
 #[cfg(test)]
 mod tests;
@@ -41,15 +42,12 @@ mod visit;
 mod walk;
 
 use super::settle::tip_above;
+use aside::{Aside, Entry};
 pub use visit::Selection;
-use visit::{Inputs, Precheck, Visit, Worker};
+use visit::{Inputs, Prechecks, Visit, Worker};
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
-/// A verifying run walks the order instead of running levels when fewer
-/// than one feather in this many is left to adjust after the checks made
-/// ahead.
-const WALK_SHARE: usize = 64;
 
 /// How a serial run (one feather after another along the order, not by
 /// levels) finds what lies on a feather it changed.
@@ -98,7 +96,7 @@ impl AdjustStats {
 /// Reusable state of ordered adjustments: level lists, feather triangles
 /// and per-worker scratch. Keep one per system; after the first frames
 /// nothing it holds grows unless the feather count or thread count does.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct Adjuster {
     triangles: Vec<FeatherTriangles>,
     /// A bounding sphere of each feather's triangles (centre, radius).
@@ -120,20 +118,26 @@ pub struct Adjuster {
     workers: Vec<Worker>,
     /// Which feathers the last run held back from their solved pose.
     settling: Vec<bool>,
-    /// Verifying (not sparse): the suspects checked ahead of the ordered
-    /// pass, in parallel, against their obstacles as they were before it
-    /// ([`Precheck`]), by feather.
-    prechecked: Vec<Precheck>,
-    /// The feathers checked ahead, in order.
+    /// Verifying (not sparse): the answers of the suspects' checks made
+    /// ahead, on other threads while the walk goes on, against their
+    /// obstacles as they were before it ([`Precheck`] as `u8`), by feather.
+    prechecked: Prechecks,
+    /// The feathers to check ahead, in order.
     precheck_items: Vec<u32>,
-    precheck_outcomes: Vec<Precheck>,
     /// The transpose of the candidate rows of a walk over obstacle rows:
     /// the feathers listing each feather.
     dependents: Csr<u32>,
-    /// Tests only: replaces [`WALK_SHARE`] (0 always walks, `usize::MAX`
-    /// never does).
+    /// The poses and geometry a walk checking ahead gives the feathers it
+    /// adjusts, until it ends.
+    aside: Aside,
+    /// Tests only: a verifying run goes by levels (checking nothing ahead)
+    /// instead of walking.
     #[cfg(test)]
-    walk_share: Option<usize>,
+    by_levels: bool,
+    /// Tests only: a walk checking ahead makes every check ahead before it
+    /// starts (on its own thread).
+    #[cfg(test)]
+    checks_ahead_first: bool,
     /// Tests only: verifies with the pairs only (or with every check)
     /// whether the run is sparse or not.
     #[cfg(test)]
@@ -268,8 +272,9 @@ impl Adjuster {
             keep_going,
         };
         let mut stats = AdjustStats::default();
-        match self.choose_walk(&inputs, order, poses, sparse) {
-            Some(walk) => self.walk_serially(walk, &inputs, order, poses, &mut stats)?,
+        match self.choose_walk(&inputs, sparse) {
+            Some(SerialWalk::Symmetric) => self.walk_serially(&inputs, order, poses, &mut stats)?,
+            Some(SerialWalk::Transposed) => self.walk_checking_ahead(&inputs, order, poses, &mut stats)?,
             None => self.walk_levels(&inputs, order, poses, &mut stats)?,
         }
         stats.seconds = start.elapsed().as_secs_f64();
@@ -322,8 +327,7 @@ impl Adjuster {
             flags.clear();
             flags.resize(n, false);
         }
-        self.prechecked.clear();
-        self.prechecked.resize(n, Precheck::None);
+        self.prechecked.reset(n);
         Some(())
     }
 
@@ -338,17 +342,49 @@ impl Adjuster {
         poses: &mut [FeatherPose],
         stats: &mut AdjustStats,
     ) {
+        if let Some(e) = self.record(i, visit, inputs, poses[i], stats) {
+            poses[i] = e.pose;
+            (self.triangles[i], self.spheres[i]) = (e.triangles, e.sphere);
+            (self.boxes[i], self.bounds[i]) = (e.boxes, e.bounds);
+        }
+    }
+
+    /// As [`Adjuster::apply`], the new pose and geometry set aside (see
+    /// [`Adjuster::walk_checking_ahead`]).
+    fn apply_aside(
+        &mut self,
+        i: usize,
+        visit: &Visit,
+        inputs: &Inputs<'_>,
+        poses: &[FeatherPose],
+        stats: &mut AdjustStats,
+    ) {
+        let old = self.aside.pose(i, poses);
+        if let Some(e) = self.record(i, visit, inputs, old, stats) {
+            self.aside.set(i, e);
+        }
+    }
+
+    /// The marks and figures of [`Adjuster::apply`] for feather `i` at
+    /// pose `old`; the pose and geometry it takes when adjusted.
+    fn record(
+        &mut self,
+        i: usize,
+        visit: &Visit,
+        inputs: &Inputs<'_>,
+        old: FeatherPose,
+        stats: &mut AdjustStats,
+    ) -> Option<Entry> {
         let (frames, shapes, selection) = (inputs.frames, inputs.shapes, inputs.selection);
         let (o, solved) = match visit {
             Visit::Adjusted(o, solved) => (o, solved),
             Visit::Verified => {
                 self.verified[i] = true;
                 stats.verified += 1;
-                return;
+                return None;
             }
-            Visit::Skipped => return,
+            Visit::Skipped => return None,
         };
-        let old = poses[i];
         if let Some(threshold) = selection.threshold() {
             // Judged by the solved pose: a feather held back while it
             // settles pulls in what lies on it as long as it is still to
@@ -366,11 +402,6 @@ impl Adjuster {
         }
         self.settling[i] = o.pose != *solved && tip_above(&frames[i], &shapes[i], o.pose, *solved);
         self.changed[i] = o.pose != old;
-        poses[i] = o.pose;
-        self.triangles[i] = feather_triangles(&frames[i], &shapes[i], o.pose);
-        self.spheres[i] = bounding_sphere(&self.triangles[i]);
-        self.boxes[i] = ObstacleBoxes::new(&self.triangles[i], shapes[i].thickness);
-        self.bounds[i] = self.boxes[i].bounds();
         self.adjusted[i] = true;
         stats.adjusted += 1;
         stats.collision_tests += u64::from(o.collision_tests);
@@ -378,6 +409,9 @@ impl Adjuster {
         stats.draped += usize::from(matches!(o.drape, DrapeRoute::Swept | DrapeRoute::Descent));
         stats.kept_in_place += usize::from(matches!(o.drape, DrapeRoute::Repaired | DrapeRoute::Lowered));
         stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
+        let triangles = feather_triangles(&frames[i], &shapes[i], o.pose);
+        let boxes = ObstacleBoxes::new(&triangles, shapes[i].thickness);
+        Some(Entry { pose: o.pose, sphere: bounding_sphere(&triangles), triangles, bounds: boxes.bounds(), boxes })
     }
 
     /// Every feather's triangles at its current pose, and their spheres.
@@ -412,6 +446,15 @@ impl Adjuster {
                 *boxes = ObstacleBoxes::new(t, s.thickness);
                 *bounds = boxes.bounds();
             });
+    }
+
+    /// Whether a verifying run goes by levels: only when a test says so.
+    fn verifies_by_levels(&self) -> bool {
+        #[cfg(test)]
+        if self.by_levels {
+            return true;
+        }
+        false
     }
 
     /// Whether verification tests the pairs only: in a sparse run (see

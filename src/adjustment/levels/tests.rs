@@ -198,10 +198,11 @@ fn tips_first(frames: &[RootFrame]) -> (Vec<u32>, Vec<u32>) {
 }
 
 /// A sparse run gives the poses, adjusted and verified flags of a run
-/// by levels over the same symmetric candidates (which checks nothing
-/// ahead): by levels, the checks made ahead, and those redone only against
-/// the obstacles changed since, change nothing, on one thread or several,
-/// nor does a verifying run's walk along the order.
+/// by levels over the same symmetric candidates, on one thread or several;
+/// so does a verifying run's walk along the order, whose checks made ahead
+/// (on the other threads as they come, or all before the walk) stand only
+/// while no obstacle changed and are redone only against the obstacles
+/// changed since.
 #[test]
 fn a_sparse_run_matches_the_levels() {
     let mut rng = Rng::new(7);
@@ -267,29 +268,32 @@ fn a_sparse_run_matches_the_levels() {
             Selection::Verify { seeds: &seeds, suspects: &suspects, threshold },
             Selection::Propagate { seeds: &seeds, threshold },
         ] {
-            let run_on = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, walk_share: usize| {
+            let run_ahead = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, by_levels: bool, first: bool| {
                 let mut adjuster =
-                    Adjuster { walk_share: Some(walk_share), pairs_only: Some(pairs_only), ..Adjuster::new() };
+                    Adjuster { by_levels, checks_ahead_first: first, pairs_only: Some(pairs_only), ..Adjuster::new() };
                 let mut poses = poses.clone();
                 let stats = adjuster.ordered_run(run, &mut poses, selection, &|_| true, sparse).unwrap();
                 (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.adjusted, stats.verified)
             };
-            let run = |sparse: bool, pairs_only: bool| run_on(&ordered, sparse, pairs_only, usize::MAX);
+            let run_on = |run: &OrderedRun<'_>, sparse: bool, pairs_only: bool, by_levels: bool| {
+                run_ahead(run, sparse, pairs_only, by_levels, false)
+            };
+            let run = |sparse: bool, pairs_only: bool| run_on(&ordered, sparse, pairs_only, true);
             if matches!(selection, Selection::Verify { .. }) {
-                // Verifying, a walk along the order over the obstacle rows'
-                // transpose instead of the levels (forced here whatever is
-                // left to adjust): the same result, over the full rows or
-                // the earlier candidates alone.
+                // Verifying, the walk along the order over the obstacle
+                // rows' transpose, checking ahead on the other threads or
+                // all first: the result of the levels, over the full rows
+                // or the earlier candidates alone.
                 for rows in [&ordered, &earlier_only] {
-                    let by_levels = run_on(rows, false, false, usize::MAX);
+                    let by_levels = run_on(rows, false, false, true);
                     for t in &threads {
-                        assert_eq!(t.install(|| run_on(rows, false, false, 0)), by_levels, "round {round}");
+                        assert_eq!(t.install(|| run_on(rows, false, false, false)), by_levels, "round {round}");
                     }
+                    assert_eq!(run_ahead(rows, false, false, false, true), by_levels, "round {round}");
                 }
             }
             for pairs_only in [false, true] {
-                // By levels (which checks the suspects ahead,
-                // Adjuster::precheck) on three threads and on one.
+                // By levels on three threads and on one.
                 let by_levels = threads[1].install(|| run(false, pairs_only));
                 assert_eq!(by_levels, threads[0].install(|| run(false, pairs_only)), "round {round}");
                 let sparse = run(true, pairs_only);

@@ -8,6 +8,7 @@ use super::super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
 use super::super::steps::adjust_feather_boxed;
 use super::super::{AdjustOutcome, AdjustParams, AdjustSteps, DrapeRoute, HeightField, ObstacleFeather};
+use super::aside::Aside;
 use crate::body::BodyIndex;
 use crate::csr::CsrView;
 use crate::feather::{FeatherPose, FeatherShape, FeatherTriangles, feather_triangles, pose_change};
@@ -15,6 +16,7 @@ use crate::geometry::RootFrame;
 use crate::validation::FeatherBoxes;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 /// Obstacles whose root normal is more than 120° from the adjusted
 /// feather's grow from the far side of a thin part (see
@@ -95,11 +97,53 @@ pub(super) struct Worker {
 pub(super) enum Precheck {
     /// Not checked ahead.
     #[default]
-    None,
+    None = 0,
     /// The pose was clear.
-    Clear,
+    Clear = 1,
     /// The pose met an obstacle or the body.
-    Blocked,
+    Blocked = 2,
+}
+
+/// Answers of checks made ahead ([`Precheck`] as `u8`), by feather; set
+/// from several threads at once.
+#[derive(Debug, Default)]
+pub(super) struct Prechecks(Vec<AtomicU8>);
+
+impl Prechecks {
+    /// No answer for `n` feathers.
+    pub(super) fn reset(&mut self, n: usize) {
+        self.0.clear();
+        self.0.resize_with(n, || AtomicU8::new(Precheck::None as u8));
+    }
+
+    pub(super) fn cells(&self) -> &[AtomicU8] {
+        &self.0
+    }
+}
+
+impl crate::memory::HeapSize for Prechecks {
+    fn heap_bytes(&self) -> usize {
+        self.0.capacity() * std::mem::size_of::<AtomicU8>()
+    }
+}
+
+impl Precheck {
+    /// The answer stored in `cell` (by [`Precheck::store`]).
+    #[inline]
+    pub(super) fn load(cell: &AtomicU8) -> Self {
+        match cell.load(Ordering::Relaxed) {
+            1 => Self::Clear,
+            2 => Self::Blocked,
+            _ => Self::None,
+        }
+    }
+
+    /// Stores this answer in `cell`. The answer is all a reader takes from
+    /// it, so no ordering with other memory is needed.
+    #[inline]
+    pub(super) fn store(self, cell: &AtomicU8) {
+        cell.store(self as u8, Ordering::Relaxed);
+    }
 }
 
 /// The read-only inputs of every feather of a level.
@@ -140,17 +184,20 @@ pub(super) enum Visit {
 pub(super) struct Marks<'a> {
     pub(super) moved: &'a [bool],
     pub(super) changed: &'a [bool],
-    /// Answers of the checks made ahead ([`super::Adjuster::precheck`]).
-    pub(super) prechecked: &'a [Precheck],
+    /// Answers of the checks made ahead ([`Precheck`] as `u8`).
+    pub(super) prechecked: &'a [AtomicU8],
 }
 
-/// Every feather's triangles at its current pose and a sphere around them.
+/// Every feather's triangles at its current pose, a sphere around them
+/// and their obstacle boxes: as in the arrays, or as set `aside` for the
+/// feathers that have an entry there.
 #[derive(Clone, Copy)]
 pub(super) struct PosedGeometry<'a> {
     pub(super) triangles: &'a [FeatherTriangles],
     pub(super) spheres: &'a [(Vec3, f32)],
     pub(super) boxes: &'a [ObstacleBoxes],
     pub(super) bounds: &'a [ObstacleBounds],
+    pub(super) aside: Option<&'a Aside>,
 }
 
 impl<'a> PosedGeometry<'a> {
@@ -159,7 +206,26 @@ impl<'a> PosedGeometry<'a> {
     where
         'a: 'b,
     {
-        BoxesOf { ids: Some(ids), all: self.boxes, bounds: self.bounds }
+        let aside = self.aside.map(Aside::set_aside_boxes);
+        BoxesOf { ids: Some(ids), all: self.boxes, bounds: self.bounds, aside }
+    }
+
+    /// Feather `j`'s bounding sphere.
+    #[inline]
+    pub(super) fn sphere(&self, j: usize) -> (Vec3, f32) {
+        self.aside.map_or(self.spheres[j], |a| a.sphere(j, self.spheres))
+    }
+
+    /// Feather `j`'s triangles.
+    #[inline]
+    pub(super) fn triangles_of(&self, j: usize) -> &'a FeatherTriangles {
+        self.aside.map_or(&self.triangles[j], |a| a.triangles(j, self.triangles))
+    }
+
+    /// Feather `j`'s obstacle boxes.
+    #[inline]
+    pub(super) fn boxes_of_one(&self, j: usize) -> &'a ObstacleBoxes {
+        self.aside.map_or(&self.boxes[j], |a| a.boxes(j, self.boxes))
     }
 }
 
@@ -233,7 +299,7 @@ pub(super) fn adjust_one(
         // A changed obstacle that cannot matter to i at any size and pose
         // is left out of its checks anyway.
         let matters = |j: usize| {
-            let (centre, radius) = posed.spheres[j];
+            let (centre, radius) = posed.sphere(j);
             reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
         };
         if !suspects[i] && !earlier.clone().any(|j| marks.changed[j] && matters(j)) {
@@ -242,7 +308,7 @@ pub(super) fn adjust_one(
         verify = true;
     }
     // A check made ahead stands when no obstacle changed since.
-    let ahead = if verify { marks.prechecked.get(i).copied().unwrap_or_default() } else { Precheck::None };
+    let ahead = if verify { marks.prechecked.get(i).map_or(Precheck::None, Precheck::load) } else { Precheck::None };
     let stands = ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]);
     if stands && ahead == Precheck::Clear {
         return Visit::Verified;
@@ -284,10 +350,10 @@ pub(super) fn adjust_one(
     worker.obstacles.clear();
     worker.obstacles.extend(worker.obstacle_ids.iter().map(|&j| {
         let j = j as usize;
-        let (centre, radius) = posed.spheres[j];
+        let (centre, radius) = posed.sphere(j);
         let in_column = reach.may_matter(centre, radius, inputs.shapes[j].thickness) == Some(true);
         ObstacleFeather {
-            triangles: posed.triangles[j],
+            triangles: *posed.triangles_of(j),
             thickness: inputs.shapes[j].thickness,
             // Out of the column, rasterising would find nothing.
             far_side: !in_column || inputs.frames[j].normal.dot(inputs.frames[i].normal) < FAR_SIDE_NORMAL_DOT,
@@ -401,7 +467,7 @@ pub(super) fn collect_obstacle_ids(inputs: &Inputs<'_>, i: usize, posed: PosedGe
             .map(|&j| j as usize)
             .filter(|&j| inputs.rank[j] < ri)
             .filter(|&j| {
-                let (centre, radius) = posed.spheres[j];
+                let (centre, radius) = posed.sphere(j);
                 reach.may_matter(centre, radius, inputs.shapes[j].thickness).is_some()
             })
             .map(|j| j as u32),
@@ -426,9 +492,9 @@ fn changed_obstacles_clear(
     let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
     if inputs.pairs_only {
         let mine = FeatherBoxes::new(&feather_triangles(frame, shape, poses[i]));
-        !changed_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
+        !changed_ids.iter().any(|&j| mine.intersects(posed.triangles_of(j as usize)))
     } else {
-        posed_meets_none_boxed(frame, shape, (poses[i], &posed.boxes[i]), posed.boxes_of(changed_ids))
+        posed_meets_none_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), posed.boxes_of(changed_ids))
     }
 }
 
@@ -446,10 +512,10 @@ pub(super) fn check_clear(
     if inputs.pairs_only {
         let mine = feather_triangles(frame, shape, poses[i]);
         let mine = FeatherBoxes::new(&mine);
-        !worker.obstacle_ids.iter().any(|&j| mine.intersects(&posed.triangles[j as usize]))
+        !worker.obstacle_ids.iter().any(|&j| mine.intersects(posed.triangles_of(j as usize)))
     } else {
         let boxes = posed.boxes_of(&worker.obstacle_ids);
-        posed_is_clear_boxed(frame, shape, (poses[i], &posed.boxes[i]), boxes, inputs.body, &mut worker.field)
+        posed_is_clear_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), boxes, inputs.body, &mut worker.field)
     }
 }
 

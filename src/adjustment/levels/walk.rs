@@ -1,63 +1,44 @@
 //! The ways an ordered run goes through the coat: by levels of the
-//! obstacle relation, or serially along the order (a sparse run, or a
-//! verifying one that the checks made ahead leave little to adjust), and
-//! those checks ahead.
+//! obstacle relation, or serially along the order (a sparse run; a
+//! verifying one, with the checks made ahead on the other threads).
 
+use super::aside::Base;
 use super::visit::{
-    Inputs, Level, Marks, PosedGeometry, Precheck, Selection, adjust_one, check_clear, collect_obstacle_ids, run_level,
+    Inputs, Level, Marks, PosedGeometry, Precheck, Selection, Worker, adjust_one, check_clear, collect_obstacle_ids,
+    run_level,
 };
-use super::{AdjustStats, Adjuster, SerialWalk, WALK_SHARE};
+use super::{AdjustStats, Adjuster, SerialWalk};
 use crate::feather::FeatherPose;
-use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU8, AtomicUsize, Ordering};
 
 impl Adjuster {
-    /// How the run goes: a serial walk when sparse, or when verifying by
-    /// levels leaves few feathers to adjust once the suspects are checked
-    /// ahead (a walk along the order that visits only them and what they
-    /// change then costs less than the levels, thousands of them, most
-    /// holding a feather or two); else by levels (`None`). Either way gives
-    /// the same poses; the choice depends on the checks' answers only,
-    /// never on the thread count.
-    pub(super) fn choose_walk(
-        &mut self,
-        inputs: &Inputs<'_>,
-        order: &[u32],
-        poses: &[FeatherPose],
-        sparse: bool,
-    ) -> Option<SerialWalk> {
-        let n = order.len();
-        let mut walk = sparse.then_some(SerialWalk::Symmetric);
-        if !sparse && let Selection::Verify { seeds, .. } = inputs.selection {
-            self.mark_selected(n, inputs.selection);
-            self.precheck(inputs, order, poses);
-            let blocked = self.prechecked.iter().filter(|&&p| p == Precheck::Blocked).count();
-            let to_adjust = seeds.iter().filter(|&&s| s).count() + blocked;
-            #[cfg(test)]
-            let share = self.walk_share.unwrap_or(WALK_SHARE);
-            #[cfg(not(test))]
-            let share = WALK_SHARE;
-            if to_adjust.saturating_mul(share) < n {
-                self.transpose(inputs.candidates);
-                walk = Some(SerialWalk::Transposed);
-            }
+    /// How the run goes: a serial walk when sparse or verifying (a
+    /// verifying run's obstacle relation runs through thousands of levels
+    /// of a feather or two, which the walk's checks made ahead spread over
+    /// the threads instead); else by levels (`None`). Any way gives the
+    /// same poses.
+    pub(super) fn choose_walk(&self, inputs: &Inputs<'_>, sparse: bool) -> Option<SerialWalk> {
+        if sparse {
+            Some(SerialWalk::Symmetric)
+        } else if matches!(inputs.selection, Selection::Verify { .. }) && !self.verifies_by_levels() {
+            Some(SerialWalk::Transposed)
+        } else {
+            None
         }
-        walk
     }
 
-    /// The serial walk: the feathers in scope one after another along the
-    /// order, each one changed bringing what lies on it into scope.
+    /// The serial walk of a sparse run: the selected feathers one after
+    /// another along the order, each one changed bringing the later
+    /// feathers of its (symmetric) candidate row into scope.
     pub(super) fn walk_serially(
         &mut self,
-        walk: SerialWalk,
         inputs: &Inputs<'_>,
         order: &[u32],
         poses: &mut [FeatherPose],
         stats: &mut AdjustStats,
     ) -> Option<()> {
         let (n, rank, candidates) = (order.len(), inputs.rank, inputs.candidates);
-        if walk == SerialWalk::Symmetric {
-            self.mark_selected(n, inputs.selection);
-        }
+        self.mark_selected(n, inputs.selection);
         for (k, &i) in order.iter().enumerate() {
             if k % 16 == 0 && !(inputs.keep_going)(k as f32 / n.max(1) as f32) {
                 return None;
@@ -66,33 +47,151 @@ impl Adjuster {
             if !self.in_scope[i] {
                 continue;
             }
-            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
+            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: self.prechecked.cells() };
             let posed = PosedGeometry {
                 triangles: &self.triangles,
                 spheres: &self.spheres,
                 boxes: &self.boxes,
                 bounds: &self.bounds,
+                aside: None,
             };
             let visit = adjust_one(inputs, i, poses, posed, marks, &mut self.workers[0]);
             self.apply(i, &visit, inputs, poses, stats);
             if self.changed[i] {
                 // What lies on it may now meet it or stand on nothing.
-                let dependents = match walk {
-                    SerialWalk::Symmetric => candidates.row(i),
-                    SerialWalk::Transposed => self.dependents.row(i),
-                };
-                for &j in dependents {
+                for &j in candidates.row(i) {
                     if rank[j as usize] > rank[i] {
                         self.in_scope[j as usize] = true;
                     }
                 }
             }
         }
-        stats.levels = match walk {
-            SerialWalk::Symmetric => usize::from(stats.adjusted + stats.verified > 0),
-            // The checks ahead, then one feather adjusted after another.
-            SerialWalk::Transposed => 1 + stats.adjusted,
+        stats.levels = usize::from(stats.adjusted + stats.verified > 0);
+        Some(())
+    }
+
+    /// The walk of a verifying run: the feathers in scope one after another
+    /// along the order on this thread, each one changed bringing what lies
+    /// on it (the obstacle rows' transpose) into scope; meanwhile the other
+    /// threads check the suspects that are not seeds ahead of it, in order,
+    /// against the coat as it was before the walk ([`Precheck`]). The walk
+    /// sets aside the poses it gives (see [`super::aside`]) until it ends,
+    /// so that the coat those checks read never changes. A feather the
+    /// walk reaches before its check ahead is checked there instead.
+    ///
+    /// A check made ahead is the answer the walk's check gives when no
+    /// obstacle changed since (same pose, same obstacles, same body), and
+    /// one that passed needs redoing only against the obstacles that
+    /// changed (see [`adjust_one`]): which checks are made ahead depends on
+    /// the threads' timing, the poses never do.
+    pub(super) fn walk_checking_ahead(
+        &mut self,
+        inputs: &Inputs<'_>,
+        order: &[u32],
+        poses: &mut [FeatherPose],
+        stats: &mut AdjustStats,
+    ) -> Option<()> {
+        let Selection::Verify { seeds, suspects, .. } = inputs.selection else {
+            unreachable!("a walk checking ahead verifies")
         };
+        let n = order.len();
+        self.mark_selected(n, inputs.selection);
+        self.transpose(inputs.candidates);
+        // Sized for every feather up front, so the heap never creeps up.
+        self.precheck_items.clear();
+        self.precheck_items.reserve(n);
+        self.precheck_items.extend(order.iter().copied().filter(|&i| {
+            let i = i as usize;
+            self.in_scope[i] && suspects[i] && !seeds[i]
+        }));
+        self.aside.reset(n);
+        // What the checks ahead read, lent out of the adjuster for the walk.
+        let items = std::mem::take(&mut self.precheck_items);
+        let prechecked = std::mem::take(&mut self.prechecked);
+        let mut workers = std::mem::take(&mut self.workers);
+        let triangles = std::mem::take(&mut self.triangles);
+        let spheres = std::mem::take(&mut self.spheres);
+        let boxes = std::mem::take(&mut self.boxes);
+        let bounds = std::mem::take(&mut self.bounds);
+        let before =
+            PosedGeometry { triangles: &triangles, spheres: &spheres, boxes: &boxes, bounds: &bounds, aside: None };
+        let (walker, checkers) = workers.split_first_mut().expect("prepare_workers makes a worker per thread");
+        let helpers = rayon::current_num_threads().saturating_sub(1).min(checkers.len());
+        let ahead = Ahead {
+            items: &items,
+            prechecked: prechecked.cells(),
+            walked: AtomicUsize::new(0),
+            next: AtomicUsize::new(0),
+        };
+        let done = AtomicBool::new(false);
+        #[cfg(test)]
+        if self.checks_ahead_first {
+            ahead.check(inputs, poses, before, &done, walker);
+        }
+        let walked = rayon::scope(|s| {
+            let (ahead, done, now) = (&ahead, &done, &*poses);
+            for worker in checkers.iter_mut().take(helpers) {
+                s.spawn(move |_| ahead.check(inputs, now, before, done, worker));
+            }
+            let walked = self.walk_aside(inputs, order, now, before, ahead, walker, stats);
+            done.store(true, Ordering::Relaxed);
+            walked
+        });
+        self.precheck_items = items;
+        self.prechecked = prechecked;
+        self.workers = workers;
+        (self.triangles, self.spheres, self.boxes, self.bounds) = (triangles, spheres, boxes, bounds);
+        walked?;
+        let base = Base {
+            poses,
+            triangles: &mut self.triangles,
+            spheres: &mut self.spheres,
+            boxes: &mut self.boxes,
+            bounds: &mut self.bounds,
+        };
+        self.aside.merge_into(base);
+        // The checks ahead, then one feather adjusted after another.
+        stats.levels = 1 + stats.adjusted;
+        Some(())
+    }
+
+    /// The walk of [`Adjuster::walk_checking_ahead`] on this thread, over
+    /// the geometry `before` the walk with its changes set aside.
+    #[allow(clippy::too_many_arguments)]
+    fn walk_aside(
+        &mut self,
+        inputs: &Inputs<'_>,
+        order: &[u32],
+        poses: &[FeatherPose],
+        before: PosedGeometry<'_>,
+        ahead: &Ahead<'_>,
+        walker: &mut Worker,
+        stats: &mut AdjustStats,
+    ) -> Option<()> {
+        let (n, rank) = (order.len(), inputs.rank);
+        for (k, &i) in order.iter().enumerate() {
+            // The checks ahead leave this one and those before it alone.
+            ahead.walked.store(k, Ordering::Relaxed);
+            if k % 16 == 0 && !(inputs.keep_going)(k as f32 / n.max(1) as f32) {
+                return None;
+            }
+            let i = i as usize;
+            if !self.in_scope[i] {
+                continue;
+            }
+            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: ahead.prechecked };
+            let posed = PosedGeometry { aside: Some(&self.aside), ..before };
+            let visit = adjust_one(inputs, i, poses, posed, marks, walker);
+            self.apply_aside(i, &visit, inputs, poses, stats);
+            if self.changed[i] {
+                // What lies on it may now meet it or stand on nothing.
+                for &j in self.dependents.row(i) {
+                    if rank[j as usize] > rank[i] {
+                        self.in_scope[j as usize] = true;
+                    }
+                }
+            }
+        }
         Some(())
     }
 
@@ -118,12 +217,13 @@ impl Adjuster {
             }
             let items = self.levels.row(l);
             let outcomes = &mut self.outcomes[..items.len()];
-            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: &self.prechecked };
+            let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: self.prechecked.cells() };
             let posed = PosedGeometry {
                 triangles: &self.triangles,
                 spheres: &self.spheres,
                 boxes: &self.boxes,
                 bounds: &self.bounds,
+                aside: None,
             };
             let done = l as f32 / levels.max(1) as f32;
             run_level(inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
@@ -138,56 +238,45 @@ impl Adjuster {
         }
         Some(())
     }
+}
 
-    /// Verifying: checks every suspect that is not a seed (those the
-    /// ordered pass will most likely only check) ahead, in parallel chunks,
-    /// against the poses before the pass. Most checked feathers have no
-    /// obstacle that the pass changes before their turn, and their level
-    /// then takes this answer instead of checking again; it is the answer
-    /// the check would give there (same pose, same obstacles, same body),
-    /// so the result does not change, at any thread count. This spreads
-    /// the checks over the threads whatever the levels are: the obstacle
-    /// relation runs through thousands of levels of a few feathers.
-    pub(super) fn precheck(&mut self, inputs: &Inputs<'_>, order: &[u32], poses: &[FeatherPose]) {
-        let Selection::Verify { seeds, suspects, .. } = inputs.selection else { return };
-        // Sized for every feather up front: how many are checked ahead
-        // varies from frame to frame, and the heap must not creep up.
-        let n = order.len();
-        self.precheck_items.clear();
-        self.precheck_items.reserve(n);
-        self.precheck_outcomes.reserve(n.saturating_sub(self.precheck_outcomes.len()));
-        self.precheck_items.extend(order.iter().copied().filter(|&i| {
+/// The checks made ahead of a verifying walk: the feathers to check, in
+/// order; their answers, by feather; the walk's place in the order; the
+/// next feather to check.
+struct Ahead<'a> {
+    items: &'a [u32],
+    prechecked: &'a [AtomicU8],
+    walked: AtomicUsize,
+    next: AtomicUsize,
+}
+
+impl Ahead<'_> {
+    /// Checks feathers ahead of the walk, taking them in order, until none
+    /// is left, the walk is `done` or `keep_going` says stop; those the
+    /// walk has reached are passed over. Reads only the coat as it was
+    /// before the walk (`posed`, `poses`).
+    fn check(
+        &self,
+        inputs: &Inputs<'_>,
+        poses: &[FeatherPose],
+        posed: PosedGeometry<'_>,
+        done: &AtomicBool,
+        worker: &mut Worker,
+    ) {
+        let mut checked = 0usize;
+        while !done.load(Ordering::Relaxed) {
+            let Some(&i) = self.items.get(self.next.fetch_add(1, Ordering::Relaxed)) else { break };
             let i = i as usize;
-            self.in_scope[i] && suspects[i] && !seeds[i]
-        }));
-        let items = &self.precheck_items;
-        self.precheck_outcomes.clear();
-        self.precheck_outcomes.resize(items.len(), Precheck::None);
-        let posed = PosedGeometry {
-            triangles: &self.triangles,
-            spheres: &self.spheres,
-            boxes: &self.boxes,
-            bounds: &self.bounds,
-        };
-        let chunk = items.len().div_ceil(self.workers.len()).max(1);
-        items
-            .par_chunks(chunk)
-            .zip(self.precheck_outcomes.par_chunks_mut(chunk))
-            .zip(self.workers.par_iter_mut())
-            .for_each(|((items, outcomes), worker)| {
-                for (k, (&i, out)) in items.iter().zip(outcomes.iter_mut()).enumerate() {
-                    // Stopped: the rest stay unchecked (the run is abandoned).
-                    if k % 16 == 0 && !(inputs.keep_going)(0.0) {
-                        break;
-                    }
-                    let i = i as usize;
-                    collect_obstacle_ids(inputs, i, posed, worker);
-                    *out =
-                        if check_clear(inputs, i, poses, posed, worker) { Precheck::Clear } else { Precheck::Blocked };
-                }
-            });
-        for (&i, &outcome) in items.iter().zip(&self.precheck_outcomes) {
-            self.prechecked[i as usize] = outcome;
+            if inputs.rank[i] as usize <= self.walked.load(Ordering::Relaxed) {
+                continue;
+            }
+            checked += 1;
+            if checked % 16 == 0 && !(inputs.keep_going)(0.0) {
+                break;
+            }
+            collect_obstacle_ids(inputs, i, posed, worker);
+            let clear = check_clear(inputs, i, poses, posed, worker);
+            (if clear { Precheck::Clear } else { Precheck::Blocked }).store(&self.prechecked[i]);
         }
     }
 }
