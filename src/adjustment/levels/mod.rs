@@ -11,12 +11,12 @@
 //!
 //! A verifying frame (every feather whose surroundings moved is checked
 //! where it lies) puts nearly every feather in scope, and the obstacle
-//! relation runs through thousands of levels of a feather or two. Its
-//! checks are made ahead, in parallel; when that leaves few feathers to
-//! adjust, the run walks the order one feather after another instead,
-//! visiting only the feathers with something to do and, through the
-//! obstacle rows' transpose, what lies on a feather it changed. Same
-//! poses either way.
+//! relation runs through thousands of levels of a feather or two, which
+//! leave the other threads idle. Such a run walks the order one feather
+//! after another instead, finding through the obstacle rows' transpose
+//! what lies on a feather it changed, while the other threads check the
+//! feathers ahead of it against the coat as it was ([`walk`]; the walk
+//! sets its changes aside meanwhile, [`aside`]). Same poses either way.
 
 use super::checks::bounding_sphere;
 use super::obstacle::{ObstacleBounds, ObstacleBoxes};

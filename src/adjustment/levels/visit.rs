@@ -88,8 +88,9 @@ pub(super) struct Worker {
     pub(super) changed_ids: Vec<u32>,
 }
 
-/// The answer of an exact check made ahead of the ordered pass. It stands
-/// for the check the ordered pass would make as long as no obstacle of the
+/// The answer of an exact check made ahead of a verifying walk, against
+/// the coat as it was before the walk. It stands
+/// for the check the walk would make as long as no obstacle of the
 /// feather changed pose before its turn (the check reads only the
 /// feather's own pose, its obstacles' poses and the body); a clear one is
 /// then redone against the obstacles that changed alone.
