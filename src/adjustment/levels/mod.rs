@@ -95,8 +95,10 @@ impl AdjustStats {
 
 /// Reusable state of ordered adjustments: level lists, feather triangles
 /// and per-worker scratch. Keep one per system; after the first frames
-/// nothing it holds grows unless the feather count or thread count does.
-#[derive(Debug, Default)]
+/// nothing it holds grows unless the feather count or thread count does,
+/// or a verifying walk adjusts more feathers than any before it (what it
+/// sets aside keeps room for the most, at most one entry per feather).
+#[derive(Clone, Debug, Default)]
 pub struct Adjuster {
     triangles: Vec<FeatherTriangles>,
     /// A bounding sphere of each feather's triangles (centre, radius).

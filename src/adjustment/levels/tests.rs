@@ -308,6 +308,70 @@ fn a_sparse_run_matches_the_levels() {
     assert!(checked > n, "too little was adjusted or checked: {checked}");
 }
 
+/// A verifying walk over a patch of bent feathers that settle (lowered,
+/// repaired in place and solved afresh while the walk sets its changes
+/// aside) gives the poses, adjusted and verified flags of the levels, on
+/// one thread and three, with its checks made ahead as they come or all
+/// before it.
+#[test]
+fn a_verifying_walk_of_bent_feathers_matches_the_levels() {
+    let mut rng = Rng::new(11);
+    let frames = wavy_patch(&mut rng, 12, 9);
+    let n = frames.len();
+    let shapes = vec![FeatherShape::for_spacing(1.0).with_segments(4); n];
+    let reach: Vec<f32> = shapes.iter().map(|s| s.length).collect();
+    let mut nb = Neighbourhoods::new();
+    nb.rebuild(&frames, &reach, &NeighbourParams::default());
+    let (order, rank) = tips_first(&frames);
+    let corners = [(-5.0, -5.0), (25.0, -5.0), (25.0, 20.0), (-5.0, 20.0)].map(|(x, y)| Vec3::new(x, y, -0.05));
+    let body = BodyIndex::from_mesh(&corners, &[[0, 1, 2], [0, 2, 3]]);
+    let params = AdjustParams::default();
+    let run = OrderedRun {
+        frames: &frames,
+        shapes: &shapes,
+        order: &order,
+        rank: &rank,
+        candidates: nb.obstacle_csr(),
+        body: &body,
+        params: &params,
+        steps: AdjustSteps::Full,
+        settle_rate: 0.035,
+    };
+    let mut start = vec![FeatherPose::default(); n];
+    Adjuster::new().adjust_in_order(&run, &mut start, Selection::All);
+    let threads = [1, 3].map(|t| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap());
+    let (mut kept, mut solved) = (0, 0);
+    for round in 0..6 {
+        // Some feathers pushed down into what lies under them, some
+        // lifted off it; a few seeds.
+        let mut poses = start.clone();
+        for p in poses.iter_mut() {
+            if rng.next_f32() < 0.3 {
+                p.pitch += 0.3 * rng.next_f32() - 0.15;
+                p.bends[0] += 0.2 * rng.next_f32() - 0.1;
+            }
+        }
+        let seeds: Vec<bool> = (0..n).map(|_| rng.next_f32() < 0.05 + 0.03 * round as f32).collect();
+        let suspects = vec![true; n];
+        let selection = Selection::Verify { seeds: &seeds, suspects: &suspects, threshold: 0.02 };
+        let walk = |by_levels: bool, checks_ahead_first: bool| {
+            let mut adjuster = Adjuster { by_levels, checks_ahead_first, ..Adjuster::new() };
+            let mut poses = poses.clone();
+            let stats = adjuster.ordered_run(&run, &mut poses, selection, &|_| true, false).unwrap();
+            (poses, adjuster.adjusted().to_vec(), adjuster.verified().to_vec(), stats.kept_in_place, stats.draped)
+        };
+        let by_levels = walk(true, false);
+        for t in &threads {
+            assert_eq!(t.install(|| walk(false, false)), by_levels, "round {round}");
+        }
+        assert_eq!(walk(false, true), by_levels, "round {round}");
+        kept += by_levels.3;
+        solved += by_levels.4;
+    }
+    // The walk met feathers kept in place and feathers solved afresh.
+    assert!(kept > 10 && solved > 0, "kept in place {kept}, solved {solved}");
+}
+
 /// A bent feather of a verifying run is kept where it lies: once its
 /// obstacle sinks away it comes down a step of at most the settle rate a
 /// frame (never meeting the obstacle, exact test) and stops with room

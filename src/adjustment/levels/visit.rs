@@ -110,6 +110,12 @@ pub(super) enum Precheck {
 #[derive(Debug, Default)]
 pub(super) struct Prechecks(Vec<AtomicU8>);
 
+impl Clone for Prechecks {
+    fn clone(&self) -> Self {
+        Self(self.0.iter().map(|c| AtomicU8::new(c.load(Ordering::Relaxed))).collect())
+    }
+}
+
 impl Prechecks {
     /// No answer for `n` feathers.
     pub(super) fn reset(&mut self, n: usize) {

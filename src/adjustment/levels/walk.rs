@@ -271,7 +271,9 @@ impl Ahead<'_> {
                 continue;
             }
             checked += 1;
-            if checked % 16 == 0 && !(inputs.keep_going)(0.0) {
+            // Told the share the walk has done (progress never goes back).
+            let done_share = self.walked.load(Ordering::Relaxed) as f32 / inputs.rank.len().max(1) as f32;
+            if checked % 16 == 0 && !(inputs.keep_going)(done_share) {
                 break;
             }
             collect_obstacle_ids(inputs, i, posed, worker);
