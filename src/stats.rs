@@ -95,10 +95,9 @@ pub struct FrameReport {
     /// one before as an obstacle, plus one per feather of a step's second
     /// pass (which runs one feather after another). A level's feathers run
     /// in parallel; levels close to the number of feathers visited mean the
-    /// call ran nearly one feather at a time. A verifying step that leaves
-    /// few feathers to adjust after checking the others ahead walks the
-    /// order instead: one level for those checks, plus one per feather
-    /// adjusted.
+    /// call ran nearly one feather at a time. A verifying step walks the
+    /// order instead, its checks made ahead on the other threads: one
+    /// level for those checks, plus one per feather adjusted.
     pub levels: usize,
 }
 

@@ -112,10 +112,10 @@ pub struct PlumageFrameStats {
     /// feathers the call may visit, of feathers each reading the one before
     /// as an obstacle, plus one per feather of a step's rare second pass.
     /// The feathers of a level run in parallel; levels close to the number
-    /// of feathers visited mean the call ran nearly one at a time. A step
-    /// that leaves few feathers to adjust after checking the others ahead
-    /// walks the order instead: one level for the checks, plus one per
-    /// feather adjusted.
+    /// of feathers visited mean the call ran nearly one at a time. A
+    /// verifying step walks the order instead, its checks made ahead on
+    /// the other threads: one level for the checks, plus one per feather
+    /// adjusted.
     pub levels: u64,
     /// Feathers whose pose relative to their root (pitch, roll, a bend)
     /// changed by more than `PlumageConfig.pop_threshold` in this call

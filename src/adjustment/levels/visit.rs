@@ -135,7 +135,8 @@ impl crate::memory::HeapSize for Prechecks {
 }
 
 impl Precheck {
-    /// The answer stored in `cell` (by [`Precheck::store`]).
+    /// The answer stored in `cell` (by [`Precheck::store`]); any other
+    /// value (a cell a thread has taken) is no answer.
     #[inline]
     pub(super) fn load(cell: &AtomicU8) -> Self {
         match cell.load(Ordering::Relaxed) {

@@ -179,6 +179,7 @@ impl Adjuster {
             if !self.in_scope[i] {
                 continue;
             }
+            ahead.take(i);
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: ahead.prechecked };
             let posed = PosedGeometry { aside: Some(&self.aside), ..before };
             let visit = adjust_one(inputs, i, poses, posed, marks, walker);
@@ -250,7 +251,37 @@ struct Ahead<'a> {
     next: AtomicUsize,
 }
 
+/// A feather's cell in `Ahead::prechecked` while a thread checks it (or
+/// once the walk has taken it): no answer yet, and no other thread is to
+/// check it.
+const TAKEN: u8 = 3;
+/// How far ahead of the walk (positions in the order) the checks ahead
+/// keep: a check that falls closer goes on from there, so that the walk
+/// and the checks share the feathers when the walk has only checks to
+/// make (it then checks the feathers in between itself).
+const LEAD: usize = 32;
+/// How long the walk waits for a check ahead under way on the feather it
+/// reaches before it checks the feather itself: about a millisecond, some
+/// hundred checks' time (a check takes a few microseconds, so the wait
+/// ends sooner unless the checking thread was descheduled).
+const WAIT_SPINS: u32 = 1 << 14;
+
 impl Ahead<'_> {
+    /// Before the walk visits feather `i`: takes it when no thread checks
+    /// it (the walk then checks it itself, and no thread will), else waits
+    /// for the check under way to end, up to [`WAIT_SPINS`]. Either way the
+    /// walk's answer is the same; waiting spares checking a feather twice
+    /// when the walk catches up with the checks ahead.
+    fn take(&self, i: usize) {
+        let cell = &self.prechecked[i];
+        for _ in 0..WAIT_SPINS {
+            match cell.compare_exchange(Precheck::None as u8, TAKEN, Ordering::Relaxed, Ordering::Relaxed) {
+                Err(TAKEN) => std::hint::spin_loop(),
+                _ => return,
+            }
+        }
+    }
+
     /// Checks feathers ahead of the walk, taking them in order, until none
     /// is left, the walk is `done` or `keep_going` says stop; those the
     /// walk has reached are passed over. Reads only the coat as it was
@@ -267,7 +298,19 @@ impl Ahead<'_> {
         while !done.load(Ordering::Relaxed) {
             let Some(&i) = self.items.get(self.next.fetch_add(1, Ordering::Relaxed)) else { break };
             let i = i as usize;
-            if inputs.rank[i] as usize <= self.walked.load(Ordering::Relaxed) {
+            // Close behind the walk, a check would race it to the same
+            // feathers: go on from a lead ahead of it instead (the walk
+            // checks the feathers between itself and there).
+            let lead = self.walked.load(Ordering::Relaxed) + LEAD;
+            if (inputs.rank[i] as usize) < lead {
+                let ahead = self.items.partition_point(|&j| (inputs.rank[j as usize] as usize) < lead);
+                self.next.fetch_max(ahead, Ordering::Relaxed);
+                continue;
+            }
+            let taken = |cell: &AtomicU8| {
+                cell.compare_exchange(Precheck::None as u8, TAKEN, Ordering::Relaxed, Ordering::Relaxed).is_err()
+            };
+            if taken(&self.prechecked[i]) {
                 continue;
             }
             checked += 1;
