@@ -77,7 +77,10 @@ impl Adjuster {
     /// against the coat as it was before the walk ([`Precheck`]). The walk
     /// sets aside the poses it gives (see [`super::aside`]) until it ends,
     /// so that the coat those checks read never changes. A feather the
-    /// walk reaches before its check ahead is checked there instead.
+    /// walk reaches before its check ahead is checked there instead; the
+    /// checks keep [`LEAD`] positions ahead of the walk, so that when the
+    /// walk has only checks to make the two share them rather than race
+    /// for the same feathers.
     ///
     /// A check made ahead is the answer the walk's check gives when no
     /// obstacle changed since (same pose, same obstacles, same body), and
