@@ -58,12 +58,7 @@ impl Adjuster {
             let visit = adjust_one(inputs, i, poses, posed, marks, &mut self.workers[0]);
             self.apply(i, &visit, inputs, poses, stats);
             if self.changed[i] {
-                // What lies on it may now meet it or stand on nothing.
-                for &j in candidates.row(i) {
-                    if rank[j as usize] > rank[i] {
-                        self.in_scope[j as usize] = true;
-                    }
-                }
+                bring_into_scope(&mut self.in_scope, rank, i, candidates.row(i));
             }
         }
         stats.levels = usize::from(stats.adjusted + stats.verified > 0);
@@ -188,12 +183,7 @@ impl Adjuster {
             let visit = adjust_one(inputs, i, poses, posed, marks, walker);
             self.apply_aside(i, &visit, inputs, poses, stats);
             if self.changed[i] {
-                // What lies on it may now meet it or stand on nothing.
-                for &j in self.dependents.row(i) {
-                    if rank[j as usize] > rank[i] {
-                        self.in_scope[j as usize] = true;
-                    }
-                }
+                bring_into_scope(&mut self.in_scope, rank, i, self.dependents.row(i));
             }
         }
         Some(())
@@ -241,6 +231,16 @@ impl Adjuster {
             }
         }
         Some(())
+    }
+}
+
+/// Marks in scope the feathers of `lying_on` that come after feather `i`,
+/// which changed pose: what lies on it may now meet it or stand on nothing.
+fn bring_into_scope(in_scope: &mut [bool], rank: &[u32], i: usize, lying_on: &[u32]) {
+    for &j in lying_on {
+        if rank[j as usize] > rank[i] {
+            in_scope[j as usize] = true;
+        }
     }
 }
 
