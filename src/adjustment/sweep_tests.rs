@@ -32,6 +32,34 @@ fn root_at(x: f32, z: f32) -> RootFrame {
     RootFrame::from_normal_and_direction(Vec3::new(x, 0.0, z), Vec3::Z, Vec3::X).unwrap()
 }
 
+/// Three feathers ahead of a root at the origin on the flat `body`, each
+/// adjusted lying on the one after it (a row of a coat).
+fn stack_ahead(body: &BodyIndex) -> Vec<ObstacleFeather> {
+    let (s, params) = (shape(), AdjustParams::default());
+    let mut field = HeightField::new(params.height_field_u, params.height_field_v);
+    let mut obstacles = Vec::new();
+    for k in (1..=3).rev() {
+        let frame = root_at(k as f32 * 0.25 * s.length, 0.0);
+        let pose = adjust_feather(
+            &frame,
+            &s,
+            FeatherPose::default(),
+            &obstacles,
+            body,
+            &params,
+            AdjustSteps::Full,
+            &mut field,
+        )
+        .pose;
+        obstacles.push(ObstacleFeather {
+            triangles: feather_triangles(&frame, &s, pose),
+            thickness: s.thickness,
+            far_side: false,
+        });
+    }
+    obstacles
+}
+
 /// Adjusts a bent feather at `frame` and checks that the swept drape
 /// placed it, clear by the exact checks; returns its tip.
 fn drape_at(frame: &RootFrame, obstacles: &[ObstacleFeather], body: &BodyIndex) -> Vec3 {
@@ -101,25 +129,7 @@ fn on_a_stack_of_feathers_the_tip_lies_on_the_top_one() {
     // the top of the stack there.
     let s = shape();
     let body = quads(&[flat(-10.0, 10.0, 0.0)]);
-    let mut obstacles = Vec::new();
-    for k in (1..=3).rev() {
-        let frame = root_at(k as f32 * 0.25 * s.length, 0.0);
-        let placed = adjust_feather(
-            &frame,
-            &s,
-            FeatherPose::default(),
-            &obstacles,
-            &body,
-            &AdjustParams::default(),
-            AdjustSteps::Full,
-            &mut HeightField::new(32, 16),
-        );
-        obstacles.push(ObstacleFeather {
-            triangles: feather_triangles(&frame, &s, placed.pose),
-            thickness: s.thickness,
-            far_side: false,
-        });
-    }
+    let obstacles = stack_ahead(&body);
     let tip = drape_at(&root_at(0.0, 0.0), &obstacles, &body);
     // The stack beneath the tip: the feathers rooted behind it, one
     // thickness each.
@@ -183,26 +193,7 @@ fn a_repair_given_up_past_its_largest_change_finds_every_small_repair() {
     let (s, params) = (shape(), AdjustParams::default());
     let body = quads(&[flat(-10.0, 10.0, 0.0)]);
     let mut field = HeightField::new(params.height_field_u, params.height_field_v);
-    let mut obstacles = Vec::new();
-    for k in (1..=3).rev() {
-        let frame = root_at(k as f32 * 0.25 * s.length, 0.0);
-        let pose = adjust_feather(
-            &frame,
-            &s,
-            FeatherPose::default(),
-            &obstacles,
-            &body,
-            &params,
-            AdjustSteps::Full,
-            &mut field,
-        )
-        .pose;
-        obstacles.push(ObstacleFeather {
-            triangles: feather_triangles(&frame, &s, pose),
-            thickness: s.thickness,
-            far_side: false,
-        });
-    }
+    let obstacles = stack_ahead(&body);
     let boxes: Vec<ObstacleBoxes> = obstacles.iter().map(|o| ObstacleBoxes::new(&o.triangles, o.thickness)).collect();
     let bounds: Vec<ObstacleBounds> = boxes.iter().map(ObstacleBoxes::bounds).collect();
     let frame = root_at(0.0, 0.0);
