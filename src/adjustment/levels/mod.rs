@@ -19,7 +19,7 @@
 //! sets its changes aside meanwhile, [`aside`]). Same poses either way.
 
 use super::checks::bounding_sphere;
-use super::obstacle::{ObstacleBounds, ObstacleBoxes};
+use super::obstacle::ObstacleBoxes;
 use super::{AdjustParams, AdjustSteps, DrapeRoute, HeightField};
 use crate::body::BodyIndex;
 use crate::csr::{Csr, CsrView};
@@ -31,7 +31,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 crate::memory::heap_size_of_fields!(Adjuster {
-    triangles, spheres, boxes, bounds, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, dependents, aside
+    posed, in_scope, level, moved, changed, adjusted, verified, levels, outcomes, workers, settling, prechecked, precheck_items, dependents, aside
 } plain { #[cfg(test)] by_levels, #[cfg(test)] checks_ahead_first, #[cfg(test)] pairs_only });
 
 mod aside;
@@ -42,9 +42,9 @@ mod visit;
 mod walk;
 
 use super::settle::tip_above;
-use aside::{Aside, Entry};
+use aside::Aside;
 pub use visit::Selection;
-use visit::{Inputs, Prechecks, Visit, Worker};
+use visit::{FeatherGeometry, Inputs, Posed, Prechecks, Visit, Worker};
 
 /// Work chunks per worker thread in one level (load balance vs. overhead).
 const CHUNKS_PER_THREAD: usize = 4;
@@ -100,14 +100,8 @@ impl AdjustStats {
 /// sets aside keeps room for the most, at most one entry per feather).
 #[derive(Clone, Debug, Default)]
 pub struct Adjuster {
-    triangles: Vec<FeatherTriangles>,
-    /// A bounding sphere of each feather's triangles (centre, radius).
-    spheres: Vec<(Vec3, f32)>,
-    /// Each feather's triangles and raised top with their boxes, as the
-    /// exact checks of the feathers it is an obstacle of meet them.
-    boxes: Vec<ObstacleBoxes>,
-    /// The outer boxes of `boxes`, by feather.
-    bounds: Vec<ObstacleBounds>,
+    /// Every feather's geometry at its pose.
+    posed: Posed,
     in_scope: Vec<bool>,
     level: Vec<u32>,
     moved: Vec<bool>,
@@ -189,7 +183,7 @@ impl Adjuster {
 
     /// Every feather's two triangles at the poses left by the last call.
     pub fn triangles(&self) -> &[FeatherTriangles] {
-        &self.triangles
+        &self.posed.triangles
     }
 
     /// Adjusts the selected feathers in `order` (`order[k]` is the k-th
@@ -344,10 +338,9 @@ impl Adjuster {
         poses: &mut [FeatherPose],
         stats: &mut AdjustStats,
     ) {
-        if let Some(e) = self.record(i, visit, inputs, poses[i], stats) {
-            poses[i] = e.pose;
-            (self.triangles[i], self.spheres[i]) = (e.triangles, e.sphere);
-            (self.boxes[i], self.bounds[i]) = (e.boxes, e.bounds);
+        if let Some((pose, geometry)) = self.record(i, visit, inputs, poses[i], stats) {
+            poses[i] = pose;
+            self.posed.set(i, &geometry);
         }
     }
 
@@ -362,8 +355,8 @@ impl Adjuster {
         stats: &mut AdjustStats,
     ) {
         let old = self.aside.pose(i, poses);
-        if let Some(e) = self.record(i, visit, inputs, old, stats) {
-            self.aside.set(i, e);
+        if let Some((pose, geometry)) = self.record(i, visit, inputs, old, stats) {
+            self.aside.set(i, pose, &geometry);
         }
     }
 
@@ -376,7 +369,7 @@ impl Adjuster {
         inputs: &Inputs<'_>,
         old: FeatherPose,
         stats: &mut AdjustStats,
-    ) -> Option<Entry> {
+    ) -> Option<(FeatherPose, FeatherGeometry)> {
         let (frames, shapes, selection) = (inputs.frames, inputs.shapes, inputs.selection);
         let (o, solved) = match visit {
             Visit::Adjusted(o, solved) => (o, solved),
@@ -411,9 +404,7 @@ impl Adjuster {
         stats.draped += usize::from(matches!(o.drape, DrapeRoute::Swept | DrapeRoute::Descent));
         stats.kept_in_place += usize::from(matches!(o.drape, DrapeRoute::Repaired | DrapeRoute::Lowered));
         stats.drape_descents += usize::from(o.drape == DrapeRoute::Descent);
-        let triangles = feather_triangles(&frames[i], &shapes[i], o.pose);
-        let boxes = ObstacleBoxes::new(&triangles, shapes[i].thickness);
-        Some(Entry { pose: o.pose, sphere: bounding_sphere(&triangles), triangles, bounds: boxes.bounds(), boxes })
+        Some((o.pose, FeatherGeometry::of(&frames[i], &shapes[i], o.pose)))
     }
 
     /// Every feather's triangles at its current pose, and their spheres.
@@ -427,15 +418,16 @@ impl Adjuster {
         poses: &[FeatherPose],
         keep_going: &(dyn Fn(f32) -> bool + Sync),
     ) {
-        self.triangles.resize(frames.len(), FeatherTriangles::kite([[Vec3::ZERO; 3]; 2]));
-        self.spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
+        let Posed { triangles, spheres, boxes, bounds } = &mut self.posed;
+        triangles.resize(frames.len(), FeatherTriangles::kite([[Vec3::ZERO; 3]; 2]));
+        spheres.resize(frames.len(), (Vec3::ZERO, 0.0));
         let unset = ObstacleBoxes::new(&[[Vec3::ZERO; 3]; 2], 0.0);
-        self.boxes.resize(frames.len(), unset);
-        self.bounds.resize(frames.len(), unset.bounds());
+        boxes.resize(frames.len(), unset);
+        bounds.resize(frames.len(), unset.bounds());
         let stopped = AtomicBool::new(false);
-        self.triangles
+        triangles
             .par_iter_mut()
-            .zip(self.spheres.par_iter_mut().zip(self.boxes.par_iter_mut().zip(self.bounds.par_iter_mut())))
+            .zip(spheres.par_iter_mut().zip(boxes.par_iter_mut().zip(bounds.par_iter_mut())))
             .zip(frames.par_iter().zip(shapes.par_iter().zip(poses.par_iter())))
             .enumerate()
             .for_each(|(k, ((t, (sphere, (boxes, bounds))), (f, (s, p))))| {

@@ -2,7 +2,9 @@
 //! or adjusted (and settled); what every feather of a level reads, and the
 //! parallel run of one level.
 
-use super::super::checks::{BoxesOf, FeatherInPlace, ObstacleReach, posed_is_clear_boxed, posed_meets_none_boxed};
+use super::super::checks::{
+    BoxesOf, FeatherInPlace, ObstacleReach, bounding_sphere, posed_is_clear_boxed, posed_meets_none_boxed,
+};
 use super::super::drape::repair_drape;
 use super::super::obstacle::{ObstacleBounds, ObstacleBoxes};
 use super::super::settle::{SettlingFeather, lowered_pose, lowest_pose, settled_pose};
@@ -194,6 +196,82 @@ pub(super) struct Marks<'a> {
     pub(super) changed: &'a [bool],
     /// Answers of the checks made ahead ([`Precheck`] as `u8`).
     pub(super) prechecked: &'a [AtomicU8],
+}
+
+/// Feathers' posed geometry, owned, one entry per feather: its triangles,
+/// a bounding sphere of them (centre, radius), its triangles and raised
+/// top with their boxes as the exact checks of the feathers it is an
+/// obstacle of meet them, and their outer boxes.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Posed {
+    pub(super) triangles: Vec<FeatherTriangles>,
+    pub(super) spheres: Vec<(Vec3, f32)>,
+    pub(super) boxes: Vec<ObstacleBoxes>,
+    pub(super) bounds: Vec<ObstacleBounds>,
+}
+
+impl Posed {
+    /// A view of it, with nothing set aside.
+    pub(super) fn view(&self) -> PosedGeometry<'_> {
+        PosedGeometry {
+            triangles: &self.triangles,
+            spheres: &self.spheres,
+            boxes: &self.boxes,
+            bounds: &self.bounds,
+            aside: None,
+        }
+    }
+
+    /// Entry `k` becomes `g`.
+    pub(super) fn set(&mut self, k: usize, g: &FeatherGeometry) {
+        (self.triangles[k], self.spheres[k]) = (g.triangles, g.sphere);
+        (self.boxes[k], self.bounds[k]) = (g.boxes, g.bounds);
+    }
+
+    /// Appends `g`.
+    pub(super) fn push(&mut self, g: &FeatherGeometry) {
+        self.triangles.push(g.triangles);
+        self.spheres.push(g.sphere);
+        self.boxes.push(g.boxes);
+        self.bounds.push(g.bounds);
+    }
+
+    /// No entries (the capacity kept).
+    pub(super) fn clear(&mut self) {
+        self.triangles.clear();
+        self.spheres.clear();
+        self.boxes.clear();
+        self.bounds.clear();
+    }
+
+    /// Entry `k`.
+    pub(super) fn get(&self, k: usize) -> FeatherGeometry {
+        FeatherGeometry {
+            triangles: self.triangles[k],
+            sphere: self.spheres[k],
+            boxes: self.boxes[k],
+            bounds: self.bounds[k],
+        }
+    }
+}
+
+crate::memory::heap_size_of_fields!(Posed { triangles, spheres, boxes, bounds });
+
+/// One feather's posed geometry (an entry of [`Posed`]).
+pub(super) struct FeatherGeometry {
+    pub(super) triangles: FeatherTriangles,
+    pub(super) sphere: (Vec3, f32),
+    pub(super) boxes: ObstacleBoxes,
+    pub(super) bounds: ObstacleBounds,
+}
+
+impl FeatherGeometry {
+    /// The geometry of feather `shape` at `frame` in `pose`.
+    pub(super) fn of(frame: &RootFrame, shape: &FeatherShape, pose: FeatherPose) -> Self {
+        let triangles = feather_triangles(frame, shape, pose);
+        let boxes = ObstacleBoxes::new(&triangles, shape.thickness);
+        Self { sphere: bounding_sphere(&triangles), triangles, bounds: boxes.bounds(), boxes }
+    }
 }
 
 /// Every feather's triangles at its current pose, a sphere around them

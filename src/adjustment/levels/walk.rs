@@ -2,7 +2,6 @@
 //! obstacle relation, or serially along the order (a sparse run; a
 //! verifying one, with the checks made ahead on the other threads).
 
-use super::aside::Base;
 use super::visit::{
     Inputs, Level, Marks, PosedGeometry, Precheck, Selection, Worker, adjust_one, check_clear, collect_obstacle_ids,
     run_level,
@@ -48,13 +47,7 @@ impl Adjuster {
                 continue;
             }
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: self.prechecked.cells() };
-            let posed = PosedGeometry {
-                triangles: &self.triangles,
-                spheres: &self.spheres,
-                boxes: &self.boxes,
-                bounds: &self.bounds,
-                aside: None,
-            };
+            let posed = self.posed.view();
             let visit = adjust_one(inputs, i, poses, posed, marks, &mut self.workers[0]);
             self.apply(i, &visit, inputs, poses, stats);
             if self.changed[i] {
@@ -107,12 +100,8 @@ impl Adjuster {
         let items = std::mem::take(&mut self.precheck_items);
         let prechecked = std::mem::take(&mut self.prechecked);
         let mut workers = std::mem::take(&mut self.workers);
-        let triangles = std::mem::take(&mut self.triangles);
-        let spheres = std::mem::take(&mut self.spheres);
-        let boxes = std::mem::take(&mut self.boxes);
-        let bounds = std::mem::take(&mut self.bounds);
-        let before =
-            PosedGeometry { triangles: &triangles, spheres: &spheres, boxes: &boxes, bounds: &bounds, aside: None };
+        let posed = std::mem::take(&mut self.posed);
+        let before = posed.view();
         let (walker, checkers) = workers.split_first_mut().expect("prepare_workers makes a worker per thread");
         let helpers = rayon::current_num_threads().saturating_sub(1).min(checkers.len());
         let ahead = Ahead {
@@ -138,16 +127,9 @@ impl Adjuster {
         self.precheck_items = items;
         self.prechecked = prechecked;
         self.workers = workers;
-        (self.triangles, self.spheres, self.boxes, self.bounds) = (triangles, spheres, boxes, bounds);
+        self.posed = posed;
         walked?;
-        let base = Base {
-            poses,
-            triangles: &mut self.triangles,
-            spheres: &mut self.spheres,
-            boxes: &mut self.boxes,
-            bounds: &mut self.bounds,
-        };
-        self.aside.merge_into(base);
+        self.aside.merge_into(poses, &mut self.posed);
         // The checks ahead, then one feather adjusted after another.
         stats.levels = 1 + stats.adjusted;
         Some(())
@@ -212,13 +194,7 @@ impl Adjuster {
             let items = self.levels.row(l);
             let outcomes = &mut self.outcomes[..items.len()];
             let marks = Marks { moved: &self.moved, changed: &self.changed, prechecked: self.prechecked.cells() };
-            let posed = PosedGeometry {
-                triangles: &self.triangles,
-                spheres: &self.spheres,
-                boxes: &self.boxes,
-                bounds: &self.bounds,
-                aside: None,
-            };
+            let posed = self.posed.view();
             let done = l as f32 / levels.max(1) as f32;
             run_level(inputs, Level { items, done }, poses, posed, marks, outcomes, &mut self.workers);
             // A level cut short left some outcomes unvisited: nothing is applied.
