@@ -932,7 +932,9 @@ typedef struct PlumageMemory {
   uint64_t history;
   /**
    * Working memory a step keeps between frames so as not to allocate
-   * again (grows with the feathers, never with the number of frames).
+   * again (grows with the feathers, never with the number of frames),
+   * with the copy of the coat a call that can be stopped (or that runs
+   * under a memory limit) keeps to restore it.
    */
   uint64_t scratch;
 } PlumageMemory;

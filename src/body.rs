@@ -10,7 +10,7 @@ use glam::Vec3;
 
 /// The body surface at the current pose: its triangles in a grid, with unit
 /// face normals. Rebuilt once per frame.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct BodyIndex {
     grid: TriangleGrid,
     normals: Vec<Vec3>,
@@ -102,6 +102,7 @@ impl BodyIndex {
     }
 }
 
+crate::memory::clone_by_fields!(BodyIndex { grid, normals });
 crate::memory::heap_size_of_fields!(BodyIndex { grid, normals });
 
 #[cfg(test)]

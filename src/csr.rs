@@ -88,7 +88,7 @@ impl<'a, T> From<(&'a [u32], &'a [T])> for CsrView<'a, T> {
 }
 
 /// Items grouped by row (module notes).
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct Csr<T> {
     offsets: Vec<u32>,
     items: Vec<T>,
@@ -240,6 +240,8 @@ impl<T: Copy + Default> Csr<T> {
         self.items.extend_from_slice(rows.items());
     }
 }
+
+crate::memory::clone_by_fields!(Csr<T> { offsets, items, cursor });
 
 impl<T: Copy> crate::memory::HeapSize for Csr<T> {
     fn heap_bytes(&self) -> usize {

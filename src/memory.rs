@@ -63,6 +63,27 @@ macro_rules! heap_size_of_fields {
 }
 pub(crate) use heap_size_of_fields;
 
+/// Implements `Clone` for a struct field by field, with a `clone_from`
+/// that clones each field from the source's in place: a value cloned into
+/// again and again (a backup taken every frame) keeps its buffers instead
+/// of allocating and freeing them each time. The struct literal names
+/// every field, so a field added later does not compile until it is
+/// listed.
+macro_rules! clone_by_fields {
+    ($ty:ident $(<$t:ident>)? { $($field:ident),* $(,)? }) => {
+        impl$(<$t: Clone>)? Clone for $ty$(<$t>)? {
+            fn clone(&self) -> Self {
+                Self { $($field: self.$field.clone()),* }
+            }
+
+            fn clone_from(&mut self, source: &Self) {
+                $(self.$field.clone_from(&source.$field);)*
+            }
+        }
+    };
+}
+pub(crate) use clone_by_fields;
+
 /// The refusal of a system that would hold `bytes` under `limit`.
 pub(crate) fn over_limit(what: &str, bytes: usize, limit: usize) -> crate::error::Error {
     crate::error::Error::new(
@@ -88,7 +109,8 @@ pub struct MemoryUse {
     pub neighbourhoods: usize,
     /// Saved states kept for seeking (checkpoints).
     pub history: usize,
-    /// Per-frame working memory kept between calls.
+    /// Per-frame working memory kept between calls, with the copy of the
+    /// coat a call that may fail keeps to restore it.
     pub scratch: usize,
 }
 

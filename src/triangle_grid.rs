@@ -75,7 +75,7 @@ impl Aabb {
 
 /// A uniform grid over a set of triangles, for box queries, ray casts and
 /// closest-point searches. Rebuilding reuses every buffer.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct TriangleGrid {
     corners: Vec<[Vec3; 3]>,
     boxes: Vec<Aabb>,
@@ -547,6 +547,17 @@ fn closest_point_f64(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     a + ab * v + ac * w
 }
 
+crate::memory::clone_by_fields!(TriangleGrid {
+    corners,
+    boxes,
+    low_cells,
+    origin,
+    cell,
+    inv_cell,
+    dims,
+    cells,
+    entries
+});
 crate::memory::heap_size_of_fields!(TriangleGrid { corners, boxes, low_cells, cells, entries } plain { origin, cell, inv_cell, dims });
 
 #[cfg(test)]

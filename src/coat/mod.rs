@@ -136,7 +136,7 @@ impl Dressing {
 /// Every feather at the current pose, plus the order and neighbourhoods
 /// that produced it. This is the state a frame changes, and what a saved
 /// state holds.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct Coat {
     /// Welded vertex positions of the current pose.
     pub positions: Vec<Vec3>,
@@ -168,6 +168,25 @@ pub struct Coat {
     /// Figures of the last create, step or evaluate.
     pub frame_report: FrameReport,
 }
+
+crate::memory::clone_by_fields!(Coat {
+    positions,
+    normals,
+    frames,
+    poses,
+    neighbourhoods,
+    order,
+    body,
+    staleness,
+    settling,
+    readjusted,
+    frame_index,
+    ordering_report,
+    frame_report
+});
+crate::memory::heap_size_of_fields!(Coat {
+    positions, normals, frames, poses, neighbourhoods, order, body, staleness, settling, readjusted
+} plain { frame_index, ordering_report, frame_report });
 
 impl Coat {
     /// The obstacle candidates of every feather (`Coat::neighbourhoods`):

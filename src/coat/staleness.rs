@@ -101,7 +101,7 @@ fn relative_placement(here: Oriented<'_>, there: Oriented<'_>) -> (Vec3, Quat) {
 /// Per feather, how far its surroundings moved relative to it since it was
 /// last adjusted (module notes). Part of the saved state: it decides which
 /// feathers later frames readjust.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Debug, Default, PartialEq)]
 pub struct Staleness {
     /// This frame's motion by the rule in use.
     moved: Vec<f32>,
@@ -278,6 +278,7 @@ fn invalid(message: &str) -> Error {
     Error::new(ErrorKind::InvalidState, message)
 }
 
+crate::memory::clone_by_fields!(Staleness { moved, summed, counts, placements });
 crate::memory::heap_size_of_fields!(Staleness { moved, summed, counts, placements });
 
 #[cfg(test)]

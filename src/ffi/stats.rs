@@ -284,7 +284,9 @@ pub struct PlumageMemory {
     /// Saved states kept for `plumage_system_seek` (checkpoints).
     pub history: u64,
     /// Working memory a step keeps between frames so as not to allocate
-    /// again (grows with the feathers, never with the number of frames).
+    /// again (grows with the feathers, never with the number of frames),
+    /// with the copy of the coat a call that can be stopped (or that runs
+    /// under a memory limit) keeps to restore it.
     pub scratch: u64,
 }
 

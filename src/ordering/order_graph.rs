@@ -132,7 +132,7 @@ impl AddAssign for ReorderStats {
 /// [`build_static`](PriorityOrder::build_static), then call
 /// [`update_frame`](PriorityOrder::update_frame) (or its parts) once per
 /// frame. All buffers are kept across calls.
-#[derive(Clone, Debug, Default)]
+#[derive(Debug, Default)]
 pub struct PriorityOrder {
     // The graph.
     pub(super) pairs: Vec<(u32, u32)>,
@@ -415,6 +415,44 @@ pub(super) fn check_pairs(pairs: &[(u32, u32)], n: usize) {
     }
 }
 
+crate::memory::clone_by_fields!(PriorityOrder {
+    pairs,
+    delta,
+    state,
+    inc,
+    edge_count,
+    rank,
+    order,
+    suppressed,
+    touched,
+    blocking,
+    path_pool,
+    path_pool_spare,
+    mark,
+    stamp,
+    parent,
+    stack,
+    forward,
+    backward,
+    rank_pool,
+    cycle,
+    cycle_pairs,
+    became_prior,
+    gained_prior,
+    moved,
+    changed,
+    frame_changed,
+    retry,
+    next_pairs,
+    next_delta,
+    next_state,
+    next_blocking,
+    pair_map,
+    fresh,
+    sort_keys,
+    waiting,
+    heap
+});
 crate::memory::heap_size_of_fields!(PriorityOrder {
     pairs, delta, state, inc, rank, order, suppressed, touched, blocking, path_pool, path_pool_spare, mark, parent,
     stack, forward, backward, rank_pool, cycle, cycle_pairs, became_prior, gained_prior, moved, changed,

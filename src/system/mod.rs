@@ -31,6 +31,10 @@ pub struct System {
     dressing: Dressing,
     sampling: SamplingReport,
     coat: Coat,
+    /// The coat as it was before the call under way, when that call may
+    /// fail (it can be stopped, or a memory limit is set): restored if it
+    /// does. Cloned into in place, so its buffers serve every frame.
+    backup: Coat,
     records: Vec<FeatherRecord>,
     triangles: Vec<[f32; 3]>,
     work: Workspace,
@@ -193,6 +197,7 @@ impl System {
             dressing,
             sampling,
             coat: Coat::default(),
+            backup: Coat::default(),
             records: Vec::new(),
             triangles: Vec::new(),
             work: Workspace::default(),
@@ -270,6 +275,7 @@ impl System {
             dressing,
             sampling: _,
             coat,
+            backup,
             records,
             triangles,
             work,
@@ -321,7 +327,7 @@ impl System {
                 + changed.heap_bytes(),
             neighbourhoods: neighbourhoods.heap_bytes() + order.heap_bytes(),
             history: checkpoints.heap_bytes(),
-            scratch: work.heap_bytes() + step_work.heap_bytes(),
+            scratch: work.heap_bytes() + step_work.heap_bytes() + backup.heap_bytes(),
         }
     }
 
@@ -462,7 +468,10 @@ impl System {
         let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
         self.previous_frames.clone_from(&self.coat.frames);
         let limit = self.dressing.config.memory_limit;
-        let backup = (progress.is_interruptible() || limit > 0).then(|| self.coat.clone());
+        let backed_up = progress.is_interruptible() || limit > 0;
+        if backed_up {
+            self.backup.clone_from(&self.coat);
+        }
         let result = update(self, progress).and_then(|()| match limit {
             0 => Ok(()),
             _ => match self.memory().total() {
@@ -486,8 +495,8 @@ impl System {
             }
             Err(_) => {
                 self.previous_poses = older_poses;
-                if let Some(coat) = backup {
-                    self.coat = coat;
+                if backed_up {
+                    std::mem::swap(&mut self.coat, &mut self.backup);
                 }
             }
         }

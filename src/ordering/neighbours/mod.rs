@@ -96,6 +96,25 @@ impl Clone for Neighbourhoods {
             ..Self::default()
         }
     }
+
+    /// The rows, k nearest and pairs cloned in place, reusing their
+    /// buffers; as with `clone`, the layout and its caches are not copied
+    /// (and the target's own are dropped).
+    fn clone_from(&mut self, source: &Self) {
+        let Self { knn_offsets, knn_indices, pairs, obstacles, .. } = source;
+        let kept = (
+            std::mem::take(&mut self.knn_offsets),
+            std::mem::take(&mut self.knn_indices),
+            std::mem::take(&mut self.pairs),
+            std::mem::take(&mut self.obstacles),
+        );
+        *self = Self::default();
+        (self.knn_offsets, self.knn_indices, self.pairs, self.obstacles) = kept;
+        self.knn_offsets.clone_from(knn_offsets);
+        self.knn_indices.clone_from(knn_indices);
+        self.pairs.clone_from(pairs);
+        self.obstacles.clone_from(obstacles);
+    }
 }
 
 impl Neighbourhoods {
