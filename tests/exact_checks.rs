@@ -2,16 +2,17 @@
 //! feather by feather (`System::audit_exact_checks`): every check of one
 //! feather against a neighbour and against the body, on the coat as it
 //! lies and nudged into and out of contact, at the default (bent) feather
-//! and the kite, on every few frames of the built-in swim, the Flamingo's
-//! clip, a strip folding onto itself, and the Fox and the bird bent out of
-//! their rest pose. A shortcut that rules out a pair or a skin face
+//! and the kite: on every frame of the Flamingo's clip, of the bird's wing
+//! beat and of the first second of the Fox's clip (skinned), on a few
+//! frames of the built-in swim and of a strip folding onto itself, and on
+//! the Fox and the bird bent out of their rest pose. A shortcut that rules out a pair or a skin face
 //! unsoundly, or a nearest-skin search that stops early, makes a
 //! disagreement here; each run must also meet both answers, so the audit
 //! cannot pass by testing only clear coats.
 
 mod common;
 
-use common::gltf_mesh::{load_model, morph_clip};
+use common::gltf_mesh::{load_model, morph_clip, skinned_clip};
 use common::shapes::{Shape, swim_body, swim_pose, thin_box};
 use plumage::validation::CheckAudit;
 use plumage::{Config, MeshInput, Preset, System};
@@ -78,8 +79,36 @@ fn checks_agree_on_the_built_in_swim() {
 #[test]
 fn checks_agree_on_the_flamingo_clip() {
     let Some((rest, clip)) = morph_clip("Flamingo.glb", 30.0) else { return };
-    let frames: Vec<Vec<f32>> = clip.iter().step_by(3).take(4).cloned().collect();
-    assert_checks_agree("Flamingo", 700, &rest, &frames);
+    assert_checks_agree("Flamingo", 700, &rest, &clip);
+}
+
+#[test]
+fn checks_agree_on_the_fox_and_the_bird_clips() {
+    // Skinned: every frame of the bird's wing beat, and of the start of
+    // the Fox's clip (its first second).
+    for (file, frames) in [("bird.glb", 21), ("Fox.glb", 31)] {
+        let Some((rest, clip)) = skinned_clip(file, 30.0, frames) else { continue };
+        // The skinning is read right: the body moves over the clip, by
+        // less than its size, and keeps its size.
+        let size = |p: &[f32]| {
+            let (lo, hi) = p.chunks(3).fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), v| {
+                (std::array::from_fn(|k| lo[k].min(v[k])), std::array::from_fn(|k| hi[k].max(v[k])))
+            });
+            (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f32>().sqrt()
+        };
+        let moved = |p: &[f32]| {
+            let each = rest.positions.chunks(3).zip(p.chunks(3));
+            each.map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f32>().sqrt()).fold(0.0f32, f32::max)
+        };
+        let most = clip.iter().map(|p| moved(p)).fold(0.0f32, f32::max);
+        let diagonal = size(&rest.positions);
+        let sizes = clip.iter().map(|p| size(p) / diagonal);
+        let (smallest, largest) = sizes.fold((f32::MAX, 0.0f32), |(lo, hi), s| (lo.min(s), hi.max(s)));
+        eprintln!("{file}: diagonal {diagonal} (frames {smallest}..{largest} of it), most moved {most}");
+        assert!(most > 0.02 * diagonal && most < diagonal, "{file}: moved {most} of a diagonal {diagonal}");
+        assert!(smallest > 0.7 && largest < 1.3, "{file}: the size changed");
+        assert_checks_agree(file, 700, &rest, &clip);
+    }
 }
 
 #[test]

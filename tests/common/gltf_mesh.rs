@@ -6,13 +6,14 @@
 //! Like the C++ host, a model with animated meshes (skinned or morphed) is
 //! read as those meshes only: the Fox's four display bases are not part of
 //! the animal. A skinned mesh is read in its bind pose, where glTF ignores
-//! the node's own transform.
+//! the node's own transform; [`skinned_clip`] skins it frame by frame.
 //!
 //! The models live in `../shared/data` relative to the crate root (see
 //! [`data_dir`] for the override). A missing model fails the test that
 //! needs it, unless `PLUMAGE_ALLOW_MISSING_DATA=1` is set: then
-//! [`load_model`] and [`morph_clip`] print a numbered `SKIPPED` line on
-//! stderr and return `None`, and the calling test checks nothing.
+//! [`load_model`], [`morph_clip`] and [`skinned_clip`] print a numbered
+//! `SKIPPED` line on stderr and return `None`, and the calling test checks
+//! nothing.
 
 use super::shapes::Shape;
 use glam::{Mat4, Vec3};
@@ -72,6 +73,18 @@ pub fn read_glb(bytes: &[u8]) -> Result<Shape, String> {
 /// weights) replacing that node's default morph weights.
 pub fn read_glb_with_weights(bytes: &[u8], weights: Option<(usize, &[f32])>) -> Result<Shape, String> {
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| e.to_string())?;
+    read_gltf_posed(&gltf, weights, None)
+}
+
+/// [`read_glb_with_weights`] on a parsed model; with `worlds` (every
+/// node's world matrix, by node index) a skinned mesh is skinned by its
+/// joints at those matrices (linear blend skinning, glTF's convention)
+/// instead of read in its bind pose.
+fn read_gltf_posed(
+    gltf: &gltf::Gltf,
+    weights: Option<(usize, &[f32])>,
+    worlds: Option<&[Mat4]>,
+) -> Result<Shape, String> {
     let blob: Option<&[u8]> = gltf.blob.as_deref();
     let scene = gltf.default_scene().or_else(|| gltf.scenes().next()).ok_or("no scene")?;
     let mut out = Shape::default();
@@ -95,11 +108,15 @@ pub fn read_glb_with_weights(bytes: &[u8], weights: Option<(usize, &[f32])>) -> 
                 Some((index, w)) if index == node.index() => w,
                 _ => node.weights().or(mesh.weights()).unwrap_or(&[]),
             };
+            let joints = match (node.skin(), worlds) {
+                (Some(skin), Some(worlds)) => Some(joint_matrices(&skin, blob, worlds)),
+                _ => None,
+            };
             for primitive in mesh.primitives() {
                 if primitive.mode() != gltf::mesh::Mode::Triangles {
                     continue;
                 }
-                append_primitive(&mut out, &primitive, blob, weights, placement)?;
+                append_primitive(&mut out, &primitive, blob, weights, placement, joints.as_deref())?;
             }
         }
         stack.extend(node.children().map(|c| (c, world)));
@@ -116,6 +133,7 @@ fn append_primitive(
     blob: Option<&[u8]>,
     weights: &[f32],
     world: Mat4,
+    joints: Option<&[Mat4]>,
 ) -> Result<(), String> {
     let reader = primitive.reader(|buffer| match buffer.source() {
         gltf::buffer::Source::Bin => blob,
@@ -129,6 +147,14 @@ fn append_primitive(
             for (p, d) in positions.iter_mut().zip(displacements) {
                 *p += Vec3::from(d) * w;
             }
+        }
+    }
+    if let Some(joints) = joints {
+        let indices = reader.read_joints(0).ok_or("skinned primitive without JOINTS_0")?.into_u16();
+        let blend = reader.read_weights(0).ok_or("skinned primitive without WEIGHTS_0")?.into_f32();
+        for ((p, j), w) in positions.iter_mut().zip(indices).zip(blend) {
+            let skin: Mat4 = (0..4).map(|k| joints[j[k] as usize] * w[k]).fold(Mat4::ZERO, |a, b| a + b);
+            *p = skin.transform_point3(*p);
         }
     }
     let base = out.vertex_count() as u32;
@@ -231,4 +257,110 @@ pub fn misread_glb(bytes: &[u8], stride: usize, offset: usize) -> Shape {
     }
     shape.positions = out;
     shape
+}
+
+/// The joint matrices of `skin` (each joint's world matrix times its
+/// inverse bind matrix) with the nodes at `worlds`.
+fn joint_matrices(skin: &gltf::Skin, blob: Option<&[u8]>, worlds: &[Mat4]) -> Vec<Mat4> {
+    let reader = skin.reader(|b| match b.source() {
+        gltf::buffer::Source::Bin => blob,
+        gltf::buffer::Source::Uri(_) => None,
+    });
+    let inverse: Vec<Mat4> = reader
+        .read_inverse_bind_matrices()
+        .map(|m| m.map(|c| Mat4::from_cols_array_2d(&c)).collect())
+        .unwrap_or_default();
+    skin.joints()
+        .enumerate()
+        .map(|(k, joint)| worlds[joint.index()] * inverse.get(k).copied().unwrap_or(Mat4::IDENTITY))
+        .collect()
+}
+
+/// Every node's world matrix with every animation of the model sampled at
+/// time `t` (LINEAR and STEP keys; a CUBICSPLINE key's value, its tangents
+/// left out).
+fn node_worlds(gltf: &gltf::Gltf, t: f32) -> Vec<Mat4> {
+    use glam::Quat;
+    use gltf::animation::util::ReadOutputs;
+    let blob = gltf.blob.as_deref();
+    let mut local: Vec<(Vec3, Quat, Vec3)> = gltf
+        .nodes()
+        .map(|n| {
+            let (t, r, s) = n.transform().decomposed();
+            (Vec3::from(t), Quat::from_array(r), Vec3::from(s))
+        })
+        .collect();
+    for animation in gltf.animations() {
+        for channel in animation.channels() {
+            let reader = channel.reader(|b| match b.source() {
+                gltf::buffer::Source::Bin => blob,
+                gltf::buffer::Source::Uri(_) => None,
+            });
+            let Some(times) = reader.read_inputs().map(|i| i.collect::<Vec<f32>>()) else { continue };
+            if times.is_empty() {
+                continue;
+            }
+            let interpolation = channel.sampler().interpolation();
+            let i = times.partition_point(|&x| x <= t).clamp(1, times.len().max(2) - 1).min(times.len() - 1);
+            let (t0, t1) = (times[i.saturating_sub(1)], times[i]);
+            let u = match interpolation {
+                gltf::animation::Interpolation::Step => 0.0,
+                _ if t1 > t0 => ((t - t0) / (t1 - t0)).clamp(0.0, 1.0),
+                _ => 0.0,
+            };
+            // A cubic spline key holds (in-tangent, value, out-tangent).
+            let key = |values: &[[f32; 4]], k: usize| match interpolation {
+                gltf::animation::Interpolation::CubicSpline => values[3 * k + 1],
+                _ => values[k],
+            };
+            let (a, b) = (i.saturating_sub(1), i);
+            let node = &mut local[channel.target().node().index()];
+            match reader.read_outputs() {
+                Some(ReadOutputs::Translations(v)) => {
+                    let v: Vec<[f32; 4]> = v.map(|p| [p[0], p[1], p[2], 0.0]).collect();
+                    let (p, q) = (Vec3::from_slice(&key(&v, a)), Vec3::from_slice(&key(&v, b)));
+                    node.0 = p.lerp(q, u);
+                }
+                Some(ReadOutputs::Scales(v)) => {
+                    let v: Vec<[f32; 4]> = v.map(|p| [p[0], p[1], p[2], 0.0]).collect();
+                    let (p, q) = (Vec3::from_slice(&key(&v, a)), Vec3::from_slice(&key(&v, b)));
+                    node.2 = p.lerp(q, u);
+                }
+                Some(ReadOutputs::Rotations(r)) => {
+                    let v: Vec<[f32; 4]> = r.into_f32().collect();
+                    let (p, q) = (Quat::from_array(key(&v, a)).normalize(), Quat::from_array(key(&v, b)).normalize());
+                    node.1 = p.slerp(q, u);
+                }
+                _ => {}
+            }
+        }
+    }
+    let mut worlds = vec![Mat4::IDENTITY; local.len()];
+    let scene = gltf.default_scene().or_else(|| gltf.scenes().next());
+    let mut stack: Vec<(gltf::Node, Mat4)> =
+        scene.map(|s| s.nodes().map(|n| (n, Mat4::IDENTITY)).collect()).unwrap_or_default();
+    while let Some((node, parent)) = stack.pop() {
+        let (t, r, s) = local[node.index()];
+        let world = parent * Mat4::from_scale_rotation_translation(s, r, t);
+        worlds[node.index()] = world;
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    worlds
+}
+
+/// A skinned model's animation sampled at `fps` for up to `frames` frames
+/// from its start, each skinned (see [`node_worlds`]), as flat positions in
+/// the numbering of [`read_glb`]: the first frame as the rest shape, the
+/// others as the clip. A missing file: see [`read_model`].
+pub fn skinned_clip(file: &str, fps: f32, frames: usize) -> Option<(Shape, Vec<Vec<f32>>)> {
+    let path = data_dir().join(file);
+    let bytes = read_model(&path)?;
+    let gltf = gltf::Gltf::from_slice(&bytes).expect("readable GLB");
+    let shape_at = |k: usize| {
+        let worlds = node_worlds(&gltf, k as f32 / fps);
+        read_gltf_posed(&gltf, None, Some(&worlds)).expect("a skinned frame")
+    };
+    let rest = shape_at(0);
+    let clip = (1..frames).map(|k| shape_at(k).positions).collect();
+    Some((rest, clip))
 }
