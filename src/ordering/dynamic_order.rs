@@ -16,6 +16,7 @@
 
 use super::order_graph::{Edge, PriorityOrder, ReorderStats, check_pairs, sanitized_delta, strength_order};
 use super::priority::Priorities;
+use rayon::prelude::*;
 use std::time::Instant;
 
 impl PriorityOrder {
@@ -53,20 +54,34 @@ impl PriorityOrder {
     /// The recomputed `ΔP` (from `priorities`) of every pair that touches
     /// one of `roots` (paper §3.3: for `i ∈ R_k`, all `j` paired with `i`),
     /// as `(lo, hi, ΔP_lo,hi)` sorted and without duplicates, ready for
-    /// [`update_pairs`](Self::update_pairs). `out` is cleared first.
-    pub fn changed_pairs_of_roots(&self, priorities: &Priorities<'_>, roots: &[u32], out: &mut Vec<(u32, u32, f32)>) {
+    /// [`update_pairs`](Self::update_pairs). `out` is cleared first. The
+    /// pairs are marked by index and read back in index order, which is
+    /// `(lo, hi)` order: no sort.
+    pub fn changed_pairs_of_roots(
+        &mut self,
+        priorities: &Priorities<'_>,
+        roots: &[u32],
+        out: &mut Vec<(u32, u32, f32)>,
+    ) {
         out.clear();
+        let mut marked = std::mem::take(&mut self.pair_marks);
+        marked.clear();
+        marked.resize(self.pairs.len().div_ceil(64), 0);
         for &i in roots {
-            for j in self.partners_of(i) {
-                let (lo, hi) = (i.min(j), i.max(j));
-                out.push((lo, hi, 0.0));
+            for e in self.incidence(i) {
+                marked[e.pair as usize / 64] |= 1 << (e.pair % 64);
             }
         }
-        out.sort_unstable_by_key(|&(lo, hi, _)| (lo, hi));
-        out.dedup_by_key(|&mut (lo, hi, _)| (lo, hi));
-        for entry in out.iter_mut() {
-            entry.2 = priorities.delta(entry.0, entry.1);
+        for (word, &bits) in marked.iter().enumerate() {
+            let mut bits = bits;
+            while bits != 0 {
+                let (lo, hi) = self.pairs[word * 64 + bits.trailing_zeros() as usize];
+                out.push((lo, hi, 0.0));
+                bits &= bits - 1;
+            }
         }
+        self.pair_marks = marked;
+        out.par_iter_mut().with_min_len(1024).for_each(|entry| entry.2 = priorities.delta(entry.0, entry.1));
     }
 
     /// Replaces the pair set (e.g. neighbourhoods recomputed at the current

@@ -163,6 +163,9 @@ pub struct PriorityOrder {
     pub(super) rank_pool: Vec<u32>,
     pub(super) cycle: Vec<u32>,
     pub(super) cycle_pairs: Vec<u32>,
+    /// One bit per pair: those touching a root of `R_k` (see
+    /// `changed_pairs_of_roots`).
+    pub(super) pair_marks: Vec<u64>,
     // Per-frame reports.
     pub(super) became_prior: Vec<u32>,
     pub(super) gained_prior: Vec<u32>,
@@ -437,6 +440,7 @@ crate::memory::clone_by_fields!(PriorityOrder {
     rank_pool,
     cycle,
     cycle_pairs,
+    pair_marks,
     became_prior,
     gained_prior,
     moved,
@@ -455,6 +459,6 @@ crate::memory::clone_by_fields!(PriorityOrder {
 });
 crate::memory::heap_size_of_fields!(PriorityOrder {
     pairs, delta, state, inc, rank, order, suppressed, touched, blocking, path_pool, path_pool_spare, mark, parent,
-    stack, forward, backward, rank_pool, cycle, cycle_pairs, became_prior, gained_prior, moved, changed,
+    stack, forward, backward, rank_pool, cycle, cycle_pairs, pair_marks, became_prior, gained_prior, moved, changed,
     frame_changed, retry, next_pairs, next_delta, next_state, next_blocking, pair_map, fresh, sort_keys, waiting, heap
 } plain { edge_count, stamp });
