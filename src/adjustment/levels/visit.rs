@@ -394,21 +394,14 @@ pub(super) fn adjust_one(
         verify = true;
     }
     // A check made ahead stands when no obstacle changed since.
-    let ahead = if verify { marks.prechecked.get(i).map_or(Precheck::None, Precheck::load) } else { Precheck::None };
+    let ahead = marks.prechecked.get(i).map_or(Precheck::None, Precheck::load);
     let stands = ahead != Precheck::None && !earlier.clone().any(|j| marks.changed[j]);
-    if stands && ahead == Precheck::Clear {
+    if verify && stands && ahead == Precheck::Clear {
         return Visit::Verified;
     }
     // The ids first: a check needs only them (and the prepared boxes);
     // the triangles are copied out only for a feather that is adjusted.
     collect_obstacle_ids(inputs, i, posed, worker);
-    let ahead = match ahead {
-        Precheck::Blocked if stands => Some(false),
-        // Clear ahead, with the same pose and body: only the obstacles
-        // changed since can have made it fail.
-        Precheck::Clear => Some(changed_obstacles_clear(inputs, i, poses, posed, marks, worker)),
-        _ => None,
-    };
     // A bent feather of an incremental verifying run is kept where it lies,
     // lowered, or repaired: solved afresh only when repair fails.
     let local = kept_locally(inputs, i, poses[i]);
@@ -419,7 +412,14 @@ pub(super) fn adjust_one(
     {
         return step;
     }
-    if (verify || local) && ahead.unwrap_or_else(|| check_clear(inputs, i, poses, posed, worker)) {
+    let clear_where_it_lies = |worker: &mut Worker| match ahead {
+        Precheck::Blocked if stands => false,
+        // Clear ahead, with the same pose and body: only the obstacles
+        // changed since can have made it fail.
+        Precheck::Clear => changed_obstacles_clear(inputs, i, poses, posed, marks, worker),
+        _ => check_clear(inputs, i, poses, posed, worker),
+    };
+    if (verify || local) && clear_where_it_lies(worker) {
         if verify {
             return Visit::Verified;
         }

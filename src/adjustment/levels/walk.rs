@@ -61,8 +61,10 @@ impl Adjuster {
     /// The walk of a verifying run: the feathers in scope one after another
     /// along the order on this thread, each one changed bringing what lies
     /// on it (the obstacle rows' transpose) into scope; meanwhile the other
-    /// threads check the suspects that are not seeds ahead of it, in order,
-    /// against the coat as it was before the walk ([`Precheck`]). The walk
+    /// threads check the suspects and the seeds ahead of it where they lie,
+    /// in order, against the coat as it was before the walk ([`Precheck`]):
+    /// a suspect is verified by its check, and a feather to be lowered
+    /// whose step down fails is kept where it lies by it. The walk
     /// sets aside the poses it gives (see [`super::aside`]) until it ends,
     /// so that the coat those checks read never changes. A feather the
     /// walk reaches before its check ahead is checked there instead; the
@@ -93,7 +95,7 @@ impl Adjuster {
         self.precheck_items.reserve(n);
         self.precheck_items.extend(order.iter().copied().filter(|&i| {
             let i = i as usize;
-            self.in_scope[i] && suspects[i] && !seeds[i]
+            self.in_scope[i] && (suspects[i] || seeds[i])
         }));
         self.aside.reset(n);
         // What the checks ahead read, lent out of the adjuster for the walk.
