@@ -536,7 +536,9 @@ typedef struct PlumageConfig {
    * feathers' own arrays alone would pass it, and after building when the
    * whole system does (everything it built is then freed); a step or
    * evaluate that would leave the system above it is refused and undone
-   * (with a limit set, each step keeps a copy of the coat to undo with).
+   * (with a limit set, as with a progress callback, the system keeps a
+   * copy of the coat from call to call to undo a call with, and counts
+   * it).
    */
   uint64_t memory_limit;
 } PlumageConfig;

@@ -180,7 +180,9 @@ macro_rules! config_fields {
             /// before its large allocations when the feathers' own arrays alone
             /// would pass it, and after building when the whole system does (then
             /// everything it built is freed); a step or evaluate that would leave
-            /// the system above it is refused and undone. Changes no result.
+            /// the system above it is refused and undone. Under a limit (as with a
+            /// progress callback) the system keeps a copy of the coat from call to
+            /// call, to undo a call with, and counts it. Changes no result.
             memory_limit: usize = 0, c[memory_limit] by Bytes, check none;
         }
     };

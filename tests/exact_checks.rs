@@ -5,10 +5,10 @@
 //! and the kite: on every frame of the Flamingo's clip, of the bird's wing
 //! beat and of the first second of the Fox's clip (skinned), on a few
 //! frames of the built-in swim and of a strip folding onto itself, and on
-//! the Fox and the bird bent out of their rest pose. A shortcut that rules out a pair or a skin face
-//! unsoundly, or a nearest-skin search that stops early, makes a
-//! disagreement here; each run must also meet both answers, so the audit
-//! cannot pass by testing only clear coats.
+//! the Fox and the bird bent out of their rest pose. A shortcut that rules
+//! out a pair or a skin face unsoundly, or a nearest-skin search that
+//! stops early, makes a disagreement here; each run must also meet both
+//! answers, so the audit cannot pass by testing only clear coats.
 
 mod common;
 
@@ -84,12 +84,12 @@ fn checks_agree_on_the_flamingo_clip() {
 
 #[test]
 fn checks_agree_on_the_fox_and_the_bird_clips() {
-    // Skinned: every frame of the bird's wing beat, and of the start of
-    // the Fox's clip (its first second).
+    // Skinned, their first clip (the host's default): every frame of the
+    // bird's wing beat, and the Fox's first second.
     for (file, frames) in [("bird.glb", 21), ("Fox.glb", 31)] {
         let Some((rest, clip)) = skinned_clip(file, 30.0, frames) else { continue };
         // The skinning is read right: the body moves over the clip, by
-        // less than its size, and keeps its size.
+        // less than its size, and keeps about its size.
         let size = |p: &[f32]| {
             let (lo, hi) = p.chunks(3).fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), v| {
                 (std::array::from_fn(|k| lo[k].min(v[k])), std::array::from_fn(|k| hi[k].max(v[k])))
@@ -106,7 +106,7 @@ fn checks_agree_on_the_fox_and_the_bird_clips() {
         let (smallest, largest) = sizes.fold((f32::MAX, 0.0f32), |(lo, hi), s| (lo.min(s), hi.max(s)));
         eprintln!("{file}: diagonal {diagonal} (frames {smallest}..{largest} of it), most moved {most}");
         assert!(most > 0.02 * diagonal && most < diagonal, "{file}: moved {most} of a diagonal {diagonal}");
-        assert!(smallest > 0.7 && largest < 1.3, "{file}: the size changed");
+        assert!(smallest > 0.5 && largest < 1.5, "{file}: the size changed");
         assert_checks_agree(file, 700, &rest, &clip);
     }
 }

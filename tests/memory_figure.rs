@@ -107,13 +107,18 @@ fn the_memory_limit_is_kept(mesh: &MeshInput<'_>, frames: &[Vec<f32>]) {
     assert_eq!(sys.save_state(), state, "a limit changes no result");
     let mut refused = false;
     for frame in frames {
-        let before_step = sys.save_state();
+        let (before_step, held) = (sys.save_state(), sys.memory().total());
         match sys.step(frame) {
             Ok(()) => assert!(sys.memory().total() <= needed + needed / 20),
             Err(e) => {
                 println!("step refused: {e}");
                 assert_eq!(e.kind(), ErrorKind::LimitExceeded, "{e}");
                 assert_eq!(sys.save_state(), before_step, "a refused step is undone");
+                // Nor does it keep the coat it made (the system stays under
+                // its limit; only a step's scratch may have grown).
+                let after = sys.memory().total();
+                println!("held {held} B before the refused step, {after} B after");
+                assert!(after <= needed + needed / 20, "held {after} B after the refused step");
                 refused = true;
                 break;
             }

@@ -33,7 +33,8 @@ pub struct System {
     coat: Coat,
     /// The coat as it was before the call under way, when that call may
     /// fail (it can be stopped, or a memory limit is set): restored if it
-    /// does. Cloned into in place, so its buffers serve every frame.
+    /// does. Cloned into in place, so its buffers serve every frame; empty
+    /// after a call that could not fail, or that failed.
     backup: Coat,
     records: Vec<FeatherRecord>,
     triangles: Vec<[f32; 3]>,
@@ -471,6 +472,10 @@ impl System {
         let backed_up = progress.is_interruptible() || limit > 0;
         if backed_up {
             self.backup.clone_from(&self.coat);
+        } else if self.backup.frames.capacity() > 0 {
+            // A call nobody can stop keeps no copy: a host that once passed
+            // a progress callback does not hold one from then on.
+            self.backup = Coat::default();
         }
         let result = update(self, progress).and_then(|()| match limit {
             0 => Ok(()),
@@ -497,6 +502,9 @@ impl System {
                 self.previous_poses = older_poses;
                 if backed_up {
                     std::mem::swap(&mut self.coat, &mut self.backup);
+                    // The coat of the failed call goes: a call refused for
+                    // its memory does not leave it held.
+                    self.backup = Coat::default();
                 }
             }
         }

@@ -276,7 +276,7 @@ fn joint_matrices(skin: &gltf::Skin, blob: Option<&[u8]>, worlds: &[Mat4]) -> Ve
         .collect()
 }
 
-/// Every node's world matrix with every animation of the model sampled at
+/// Every node's world matrix with the model's first animation sampled at
 /// time `t` (LINEAR and STEP keys; a CUBICSPLINE key's value, its tangents
 /// left out).
 fn node_worlds(gltf: &gltf::Gltf, t: f32) -> Vec<Mat4> {
@@ -290,7 +290,7 @@ fn node_worlds(gltf: &gltf::Gltf, t: f32) -> Vec<Mat4> {
             (Vec3::from(t), Quat::from_array(r), Vec3::from(s))
         })
         .collect();
-    for animation in gltf.animations() {
+    for animation in gltf.animations().take(1) {
         for channel in animation.channels() {
             let reader = channel.reader(|b| match b.source() {
                 gltf::buffer::Source::Bin => blob,

@@ -466,7 +466,7 @@ pub(super) fn adjust_one(
 /// (a seed, or on an obstacle that sank), is kept where it lies rather
 /// than solved afresh: a full-size bent feather. A shortened one is solved
 /// (it may regrow), and so is every kite.
-fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
+pub(super) fn kept_locally(inputs: &Inputs<'_>, i: usize, pose: FeatherPose) -> bool {
     matches!(inputs.selection, Selection::Verify { .. })
         && !inputs.pairs_only
         && inputs.settle_rate > 0.0

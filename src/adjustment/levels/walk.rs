@@ -4,7 +4,7 @@
 
 use super::visit::{
     Inputs, Level, Marks, PosedGeometry, Precheck, Selection, Worker, adjust_one, check_clear, collect_obstacle_ids,
-    run_level,
+    kept_locally, run_level,
 };
 use super::{AdjustStats, Adjuster, SerialWalk};
 use crate::feather::FeatherPose;
@@ -95,7 +95,9 @@ impl Adjuster {
         self.precheck_items.reserve(n);
         self.precheck_items.extend(order.iter().copied().filter(|&i| {
             let i = i as usize;
-            self.in_scope[i] && (suspects[i] || seeds[i])
+            // A seed's check where it lies is of use only to one kept in
+            // place (checked there when its step down fails).
+            self.in_scope[i] && (suspects[i] || seeds[i] && kept_locally(inputs, i, poses[i]))
         }));
         self.aside.reset(n);
         // What the checks ahead read, lent out of the adjuster for the walk.
