@@ -920,8 +920,9 @@ typedef struct PlumageMemory {
   uint64_t mesh;
   /**
    * The feathers at the current pose: frames, poses, triangles, records,
-   * the previous frame's poses and root frames, and the list of feathers
-   * the last call changed.
+   * the previous frame's poses and root frames (and the poses before
+   * those, to undo a call with), and the list of feathers the last call
+   * changed.
    */
   uint64_t coat;
   /**

@@ -101,8 +101,9 @@ pub struct MemoryUse {
     /// the roots' rest binding and the current vertex positions.
     pub mesh: usize,
     /// The feathers' frames, poses, triangles and records at the current
-    /// pose, the previous frame's poses and root frames, and the list of
-    /// feathers the last call changed.
+    /// pose, the previous frame's poses and root frames (and the poses
+    /// before those, to undo a call with), and the list of feathers the
+    /// last call changed.
     pub coat: usize,
     /// The neighbourhoods (k-nearest and obstacle rows, their tree) and the
     /// priority order between neighbours.

@@ -114,11 +114,12 @@ fn the_memory_limit_is_kept(mesh: &MeshInput<'_>, frames: &[Vec<f32>]) {
                 println!("step refused: {e}");
                 assert_eq!(e.kind(), ErrorKind::LimitExceeded, "{e}");
                 assert_eq!(sys.save_state(), before_step, "a refused step is undone");
-                // Nor does it keep the coat it made (the system stays under
-                // its limit; only a step's scratch may have grown).
+                // Nor does it keep the coat it made: only a step's scratch
+                // and buffers may have grown (a few MB here; the coat it
+                // made is some 50 MB).
                 let after = sys.memory().total();
                 println!("held {held} B before the refused step, {after} B after");
-                assert!(after <= needed + needed / 20, "held {after} B after the refused step");
+                assert!(after < held + needed / 10, "held {after} B after the refused step, {held} B before");
                 refused = true;
                 break;
             }

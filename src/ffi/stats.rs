@@ -276,8 +276,9 @@ pub struct PlumageMemory {
     /// binding and the current vertex positions.
     pub mesh: u64,
     /// The feathers at the current pose: frames, poses, triangles, records,
-    /// the previous frame's poses and root frames, and the list of feathers
-    /// the last call changed.
+    /// the previous frame's poses and root frames (and the poses before
+    /// those, to undo a call with), and the list of feathers the last call
+    /// changed.
     pub coat: u64,
     /// The neighbourhoods and the priority order between neighbours.
     pub neighbourhoods: u64,

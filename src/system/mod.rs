@@ -43,6 +43,9 @@ pub struct System {
     frame_positions: Vec<Vec3>,
     /// The poses before the last step or evaluate, and how they changed.
     previous_poses: Vec<FeatherPose>,
+    /// The poses `previous_poses` held before the call under way, given
+    /// back to it if that call fails (a spare buffer otherwise).
+    older_poses: Vec<FeatherPose>,
     pose_changes: PoseChanges,
     /// The root frames before the last step or evaluate.
     previous_frames: Vec<RootFrame>,
@@ -205,6 +208,7 @@ impl System {
             step_work: StepWorkspace::default(),
             frame_positions: Vec::new(),
             previous_poses: Vec::new(),
+            older_poses: Vec::new(),
             pose_changes: PoseChanges::default(),
             previous_frames: Vec::new(),
             changed: Vec::new(),
@@ -283,6 +287,7 @@ impl System {
             step_work,
             frame_positions,
             previous_poses,
+            older_poses,
             previous_frames,
             changed,
             reposed: _,
@@ -324,6 +329,7 @@ impl System {
                 + records.heap_bytes()
                 + triangles.heap_bytes()
                 + previous_poses.heap_bytes()
+                + older_poses.heap_bytes()
                 + previous_frames.heap_bytes()
                 + changed.heap_bytes(),
             neighbourhoods: neighbourhoods.heap_bytes() + order.heap_bytes(),
@@ -466,7 +472,8 @@ impl System {
         update: impl FnOnce(&mut Self, &Progress) -> Result<()>,
     ) -> Result<()> {
         self.mesh.welded_positions_into(positions, &mut self.frame_positions);
-        let older_poses = std::mem::replace(&mut self.previous_poses, self.coat.poses.clone());
+        std::mem::swap(&mut self.previous_poses, &mut self.older_poses);
+        self.previous_poses.clone_from(&self.coat.poses);
         self.previous_frames.clone_from(&self.coat.frames);
         let limit = self.dressing.config.memory_limit;
         let backed_up = progress.is_interruptible() || limit > 0;
@@ -499,7 +506,7 @@ impl System {
                 self.export()
             }
             Err(_) => {
-                self.previous_poses = older_poses;
+                std::mem::swap(&mut self.previous_poses, &mut self.older_poses);
                 if backed_up {
                     std::mem::swap(&mut self.coat, &mut self.backup);
                     // The coat of the failed call goes: a call refused for
