@@ -8,9 +8,7 @@ use crate::Config;
 use crate::adjustment::AdjustParams;
 use crate::body::BodyIndex;
 use crate::csr::CsrView;
-use crate::feather::{
-    FeatherPose, FeatherShape, FeatherType, feather_triangles, shaft_direction, triangles_per_feather,
-};
+use crate::feather::{FeatherPose, FeatherShape, FeatherType, feather_triangles, shaft_direction};
 use crate::geometry::RootFrame;
 use crate::mesh::WeldedMesh;
 use crate::ordering::{NeighbourParams, Neighbourhoods, PriorityOrder};
@@ -18,7 +16,6 @@ use crate::roots::{RootBinding, RootNormal, pose_roots};
 use crate::stats::{FeatherRecord, FrameReport, OrderingReport};
 use crate::surface::Surface;
 use glam::Vec3;
-use rayon::prelude::*;
 
 mod blob;
 mod staleness;
@@ -213,120 +210,33 @@ impl Coat {
         );
     }
 
-    /// Fills the host-facing records and triangles of every feather, in
-    /// parallel on the calling pool. `starts` is where each feather's
-    /// corners start in `triangles` (and their total), made here when it
-    /// does not hold one entry per feather and one more: the shapes fix it.
-    pub fn export(
-        &self,
-        dressing: &Dressing,
-        records: &mut Vec<FeatherRecord>,
-        triangles: &mut Vec<[f32; 3]>,
-        starts: &mut Vec<usize>,
-    ) {
-        let n = dressing.len();
-        if starts.len() != n + 1 {
-            starts.clear();
-            starts.push(0);
-            let mut total = 0;
-            starts.extend(dressing.shapes.iter().map(|s| {
-                total += 3 * triangles_per_feather(s);
-                total
-            }));
-        }
+    /// Fills the host-facing records and triangles of every feather.
+    pub fn export(&self, dressing: &Dressing, records: &mut Vec<FeatherRecord>, triangles: &mut Vec<[f32; 3]>) {
         records.clear();
-        records.par_extend((0..n).into_par_iter().with_min_len(EXPORT_BLOCK).map(|i| self.record_of(dressing, i)));
         triangles.clear();
-        triangles.resize(starts[n], [0.0; 3]);
-        let corners_of = |i: usize, out: &mut [[f32; 3]]| {
-            let tris = feather_triangles(&self.frames[i], &dressing.shapes[i], self.poses[i]);
-            debug_assert_eq!(out.len(), 3 * tris.len());
-            out.iter_mut().zip(tris.iter().flatten()).for_each(|(o, p)| *o = p.to_array());
-        };
-        fill_by_feather(0..n, triangles, starts, &corners_of);
-    }
-
-    /// Feather `i` as the host sees it.
-    fn record_of(&self, dressing: &Dressing, i: usize) -> FeatherRecord {
-        let (root, frame, pose, shape) = (&dressing.roots[i], &self.frames[i], self.poses[i], &dressing.shapes[i]);
-        FeatherRecord {
-            id: root.id,
-            order_index: self.order.rank_of(i as u32),
-            triangle: dressing.source_triangle[root.point.face as usize],
-            barycentric: root.point.bary,
-            root: frame.position.to_array(),
-            normal: frame.normal.to_array(),
-            direction: shaft_direction(frame, pose).to_array(),
-            pitch: pose.pitch,
-            roll: pose.roll,
-            length: shape.length * pose.scale,
-            width: shape.width * pose.scale,
-            thickness: shape.thickness,
+        for (i, ((root, frame), (pose, shape))) in
+            dressing.roots.iter().zip(&self.frames).zip(self.poses.iter().zip(&dressing.shapes)).enumerate()
+        {
+            let tris = feather_triangles(frame, shape, *pose);
+            triangles.extend(tris.iter().flatten().map(|p| p.to_array()));
+            records.push(FeatherRecord {
+                id: root.id,
+                order_index: self.order.rank_of(i as u32),
+                triangle: dressing.source_triangle[root.point.face as usize],
+                barycentric: root.point.bary,
+                root: frame.position.to_array(),
+                normal: frame.normal.to_array(),
+                direction: shaft_direction(frame, *pose).to_array(),
+                pitch: pose.pitch,
+                roll: pose.roll,
+                length: shape.length * pose.scale,
+                width: shape.width * pose.scale,
+                thickness: shape.thickness,
+            });
         }
     }
-}
-
-/// Feathers exported one after another by one thread.
-const EXPORT_BLOCK: usize = 512;
-
-/// Runs `fill(i, corners of feather i)` for the feathers of `range` over
-/// `out` (the corners from `starts[range.start]` on), halving the range
-/// across the pool down to blocks of [`EXPORT_BLOCK`].
-fn fill_by_feather(
-    range: std::ops::Range<usize>,
-    out: &mut [[f32; 3]],
-    starts: &[usize],
-    fill: &(impl Fn(usize, &mut [[f32; 3]]) + Sync),
-) {
-    let base = starts[range.start];
-    if range.len() <= EXPORT_BLOCK {
-        for i in range {
-            fill(i, &mut out[starts[i] - base..starts[i + 1] - base]);
-        }
-        return;
-    }
-    let mid = range.start + range.len() / 2;
-    let (low, high) = out.split_at_mut(starts[mid] - base);
-    rayon::join(
-        || fill_by_feather(range.start..mid, low, starts, fill),
-        || fill_by_feather(mid..range.end, high, starts, fill),
-    );
 }
 
 crate::memory::heap_size_of_fields!(Dressing { surface, triangles, source_triangle, feathered, layers, roots, shapes, reach, face_part } plain {
     neighbour_params, adjust_params, config, parts
 });
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn each_feather_fills_exactly_its_own_corners_whatever_the_split() {
-        // Feathers of 2 to 16 triangles (as feather types mix), more than
-        // a block of them, on pools of 1 to 3 threads: every corner is
-        // written once, by its own feather, at its place.
-        for (n, threads) in [(0, 1), (1, 2), (EXPORT_BLOCK + 1, 2), (3 * EXPORT_BLOCK + 17, 3), (5000, 1)] {
-            let mut starts = vec![0usize];
-            for i in 0..n {
-                starts.push(starts[i] + 3 * (2 + (i * 7919) % 15));
-            }
-            let mut out = vec![[f32::NAN; 3]; starts[n]];
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| {
-                fill_by_feather(0..n, &mut out, &starts, &|i, corners: &mut [[f32; 3]]| {
-                    assert_eq!(corners.len(), starts[i + 1] - starts[i], "feather {i}'s span");
-                    for (k, c) in corners.iter_mut().enumerate() {
-                        assert!(c[0].is_nan(), "corner {k} of feather {i} written twice");
-                        *c = [i as f32, k as f32, 0.0];
-                    }
-                });
-            });
-            for i in 0..n {
-                for (k, c) in out[starts[i]..starts[i + 1]].iter().enumerate() {
-                    assert_eq!(*c, [i as f32, k as f32, 0.0], "{n} feathers, {threads} threads");
-                }
-            }
-        }
-    }
-}

@@ -38,9 +38,6 @@ pub struct System {
     backup: Coat,
     records: Vec<FeatherRecord>,
     triangles: Vec<[f32; 3]>,
-    /// Where each feather's corners start in `triangles` (see
-    /// [`Coat::export`]).
-    triangle_starts: Vec<usize>,
     work: Workspace,
     step_work: StepWorkspace,
     frame_positions: Vec<Vec3>,
@@ -207,7 +204,6 @@ impl System {
             backup: Coat::default(),
             records: Vec::new(),
             triangles: Vec::new(),
-            triangle_starts: Vec::new(),
             work: Workspace::default(),
             step_work: StepWorkspace::default(),
             frame_positions: Vec::new(),
@@ -287,7 +283,6 @@ impl System {
             backup,
             records,
             triangles,
-            triangle_starts,
             work,
             step_work,
             frame_positions,
@@ -333,7 +328,6 @@ impl System {
                 + readjusted.heap_bytes()
                 + records.heap_bytes()
                 + triangles.heap_bytes()
-                + triangle_starts.heap_bytes()
                 + previous_poses.heap_bytes()
                 + older_poses.heap_bytes()
                 + previous_frames.heap_bytes()
@@ -525,8 +519,8 @@ impl System {
     }
 
     fn export(&mut self) {
-        let Self { pool, coat, dressing, records, triangles, triangle_starts, .. } = self;
-        pool.install(|| coat.export(dressing, records, triangles, triangle_starts));
+        let Self { coat, dressing, records, triangles, .. } = self;
+        coat.export(dressing, records, triangles);
     }
 }
 
