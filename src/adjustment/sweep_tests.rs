@@ -144,13 +144,7 @@ fn passing_prisms_over_by_their_bounding_angle_changes_no_answer() {
     // Random obstacle and skin triangles round segments at random joints
     // and sweeps: the lowest clear angle (or a block) is the same with the
     // prisms ruled out by their boxes passed over and with every one cut.
-    let mut seed = 0x9e37_79b9_u32;
-    let mut unit = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed as f32 / u32::MAX as f32
-    };
+    let mut unit = xorshift(0x9e37_79b9);
     let (mut differ, mut raised, mut blocked) = (0, 0, 0);
     for _ in 0..400 {
         let joint = Vec2::new(unit() * 0.6, unit() * 0.2);
@@ -206,13 +200,7 @@ fn a_repair_given_up_past_its_largest_change_finds_every_small_repair() {
     let rest =
         adjust_feather(&frame, &s, FeatherPose::default(), &obstacles, &body, &params, AdjustSteps::Full, &mut field)
             .pose;
-    let mut seed = 0x2545_f491_u32;
-    let mut unit = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 17;
-        seed ^= seed << 5;
-        seed as f32 / u32::MAX as f32
-    };
+    let mut unit = xorshift(0x2545_f491);
     let (mut within, mut beyond) = (0, 0);
     for _ in 0..200 {
         let mut start = rest;
@@ -231,4 +219,14 @@ fn a_repair_given_up_past_its_largest_change_finds_every_small_repair() {
     // Both kinds occur: repairs that move the feather within the bound,
     // and repairs beyond it.
     assert!(within > 20 && beyond > 20, "within {within}, beyond {beyond}");
+}
+
+/// Numbers in [0, 1] from a xorshift generator seeded with `seed`.
+fn xorshift(mut seed: u32) -> impl FnMut() -> f32 {
+    move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        seed as f32 / u32::MAX as f32
+    }
 }

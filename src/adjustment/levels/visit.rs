@@ -575,13 +575,18 @@ fn changed_obstacles_clear(
     let Worker { obstacle_ids, changed_ids, .. } = worker;
     changed_ids.clear();
     changed_ids.extend(obstacle_ids.iter().copied().filter(|&j| marks.changed[j as usize]));
-    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
     if inputs.pairs_only {
-        let mine = FeatherBoxes::new(&feather_triangles(frame, shape, poses[i]));
-        !changed_ids.iter().any(|&j| mine.intersects(posed.triangles_of(j as usize)))
-    } else {
-        posed_meets_none_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), posed.boxes_of(changed_ids))
+        return meets_no_pair(inputs, i, poses[i], posed, changed_ids);
     }
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    posed_meets_none_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), posed.boxes_of(changed_ids))
+}
+
+/// Whether feather `i` at `pose` meets none of the feathers `ids` (the
+/// pair tests alone, of a run that tests the pairs only).
+fn meets_no_pair(inputs: &Inputs<'_>, i: usize, pose: FeatherPose, posed: PosedGeometry<'_>, ids: &[u32]) -> bool {
+    let mine = FeatherBoxes::new(&feather_triangles(&inputs.frames[i], &inputs.shapes[i], pose));
+    !ids.iter().any(|&j| mine.intersects(posed.triangles_of(j as usize)))
 }
 
 /// The exact check of feather `i` at its current pose against the
@@ -594,15 +599,12 @@ pub(super) fn check_clear(
     posed: PosedGeometry<'_>,
     worker: &mut Worker,
 ) -> bool {
-    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
     if inputs.pairs_only {
-        let mine = feather_triangles(frame, shape, poses[i]);
-        let mine = FeatherBoxes::new(&mine);
-        !worker.obstacle_ids.iter().any(|&j| mine.intersects(posed.triangles_of(j as usize)))
-    } else {
-        let boxes = posed.boxes_of(&worker.obstacle_ids);
-        posed_is_clear_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), boxes, inputs.body, &mut worker.field)
+        return meets_no_pair(inputs, i, poses[i], posed, &worker.obstacle_ids);
     }
+    let (frame, shape) = (&inputs.frames[i], &inputs.shapes[i]);
+    let boxes = posed.boxes_of(&worker.obstacle_ids);
+    posed_is_clear_boxed(frame, shape, (poses[i], posed.boxes_of_one(i)), boxes, inputs.body, &mut worker.field)
 }
 
 crate::memory::heap_size_of_fields!(Worker { field, obstacles, obstacle_ids, changed_ids });
